@@ -1,0 +1,243 @@
+//! The derived equations compiled to a flat tape: what the simulator and
+//! the linearisation evaluate, with no tree walk and no name lookup per step.
+
+use std::collections::BTreeMap;
+
+use crate::causality::assign_causality;
+use crate::equations::Equations;
+use crate::error::{BondError, Result};
+use crate::expr::{Expr, Leaf, Tape, TapeBuilder, Var};
+use crate::graph::BondGraph;
+
+/// A model ready to evaluate: `ẋ = f(t, x, u)` and `y = g(t, x, u)`.
+///
+/// Slot layout: `[t, x…, u…, bond variables…, temporaries…]`. Parameters are
+/// folded into the tape as constants; changing one means compiling again
+/// (microseconds).
+#[derive(Clone, Debug)]
+pub struct CompiledModel {
+    tape: Tape,
+    n_states: usize,
+    n_inputs: usize,
+    deriv_slots: Vec<usize>,
+    output_slots: Vec<usize>,
+    var_slots: Vec<(Var, usize)>,
+    /// State names (`p3`, `p8`), in state order.
+    pub state_names: Vec<String>,
+    /// Input names, in input order (the graph's order).
+    pub input_names: Vec<String>,
+    /// Default value of each input.
+    pub input_defaults: Vec<f64>,
+    /// Output names, in the graph's order.
+    pub output_names: Vec<String>,
+    /// True when the equations are linear and time-invariant in states and
+    /// inputs (no nonlinear law, no modulated element, no `t`).
+    pub is_lti: bool,
+}
+
+impl CompiledModel {
+    /// Assigns causality, derives the equations and compiles them.
+    ///
+    /// # Errors
+    /// Any error of [`assign_causality`] or [`Equations::derive`].
+    pub fn new(g: &BondGraph) -> Result<CompiledModel> {
+        let c = assign_causality(g)?;
+        let eqs = Equations::derive(g, &c)?;
+        CompiledModel::from_equations(g, &eqs)
+    }
+
+    /// Compiles already derived equations with the graph's parameter values.
+    ///
+    /// # Errors
+    /// [`BondError::UnknownParameter`] if an equation mentions an undeclared name.
+    pub fn from_equations(g: &BondGraph, eqs: &Equations) -> Result<CompiledModel> {
+        let n_states = eqs.states.len();
+        let n_inputs = eqs.inputs.len();
+        let mut slots: BTreeMap<Var, usize> = BTreeMap::new();
+        for (i, s) in eqs.states.iter().enumerate() {
+            slots.insert(s.var, 1 + i);
+        }
+        let input_slot: BTreeMap<&str, usize> = eqs
+            .inputs
+            .iter()
+            .enumerate()
+            .map(|(i, n)| (n.as_str(), 1 + n_states + i))
+            .collect();
+        let mut next = 1 + n_states + n_inputs;
+        for eq in &eqs.equations {
+            slots.entry(eq.target).or_insert_with(|| {
+                next += 1;
+                next - 1
+            });
+        }
+        let mut builder = TapeBuilder::new(next);
+        let mut is_lti = true;
+        for &i in &eqs.order {
+            let eq = &eqs.equations[i];
+            let dst = slots[&eq.target];
+            if !affine_in_slots(&eq.rhs) {
+                is_lti = false;
+            }
+            builder.assign(dst, &eq.rhs, &mut |leaf: &Expr| -> Result<Leaf> {
+                match leaf {
+                    Expr::Param(name) => g.param(name).map(Leaf::Const),
+                    Expr::Input(name) => input_slot
+                        .get(name.as_str())
+                        .map(|&s| Leaf::Slot(s))
+                        .ok_or_else(|| BondError::BadInput {
+                            input: name.clone(),
+                            detail: "is not declared by the model".to_string(),
+                        }),
+                    Expr::Var(v) => {
+                        slots
+                            .get(v)
+                            .map(|&s| Leaf::Slot(s))
+                            .ok_or_else(|| BondError::BadLaw {
+                                element: format!("{v}"),
+                                detail: "variable is used before any equation defines it"
+                                    .to_string(),
+                            })
+                    }
+                    Expr::Time => Ok(Leaf::Slot(0)),
+                    other => Err(BondError::BadLaw {
+                        element: format!("{other:?}"),
+                        detail: "unbound name in a derived equation".to_string(),
+                    }),
+                }
+            })?;
+        }
+        let tape = builder.finish();
+        let deriv_slots = eqs.states.iter().map(|s| slots[&s.derivative]).collect();
+        let output_slots = eqs
+            .outputs
+            .iter()
+            .map(|o| slots.get(&o.var).copied())
+            .collect::<Option<Vec<_>>>()
+            .ok_or_else(|| BondError::BadOutput {
+                output: eqs
+                    .outputs
+                    .iter()
+                    .map(|o| o.name.clone())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                detail: "reads a variable no equation computes".to_string(),
+            })?;
+        let var_slots = slots.iter().map(|(v, s)| (*v, *s)).collect();
+        Ok(CompiledModel {
+            tape,
+            var_slots,
+            n_states,
+            n_inputs,
+            deriv_slots,
+            output_slots,
+            state_names: eqs.states.iter().map(|s| s.var.to_string()).collect(),
+            input_names: eqs.inputs.clone(),
+            input_defaults: eqs
+                .inputs
+                .iter()
+                .map(|n| g.inputs().get(n).map_or(0.0, |i| i.default))
+                .collect(),
+            output_names: eqs.outputs.iter().map(|o| o.name.clone()).collect(),
+            is_lti,
+        })
+    }
+
+    /// Number of states.
+    pub fn n_states(&self) -> usize {
+        self.n_states
+    }
+
+    /// Number of inputs.
+    pub fn n_inputs(&self) -> usize {
+        self.n_inputs
+    }
+
+    /// Number of outputs.
+    pub fn n_outputs(&self) -> usize {
+        self.output_slots.len()
+    }
+
+    /// Number of ops on the tape (a measure of evaluation cost).
+    pub fn n_ops(&self) -> usize {
+        self.tape.n_ops()
+    }
+
+    /// A scratch buffer sized for [`CompiledModel::eval`].
+    pub fn scratch(&self) -> Vec<f64> {
+        vec![0.0; self.tape.n_slots()]
+    }
+
+    /// Evaluates everything at `(t, x, u)`; read results with
+    /// [`CompiledModel::read_derivatives`] and [`CompiledModel::read_outputs`].
+    #[inline]
+    pub fn eval(&self, t: f64, x: &[f64], u: &[f64], scratch: &mut [f64]) {
+        debug_assert_eq!(x.len(), self.n_states);
+        debug_assert_eq!(u.len(), self.n_inputs);
+        scratch[0] = t;
+        scratch[1..1 + self.n_states].copy_from_slice(x);
+        scratch[1 + self.n_states..1 + self.n_states + self.n_inputs].copy_from_slice(u);
+        self.tape.eval(scratch);
+    }
+
+    /// The state derivatives after [`CompiledModel::eval`].
+    #[inline]
+    pub fn read_derivatives(&self, scratch: &[f64], dx: &mut [f64]) {
+        for (d, &s) in dx.iter_mut().zip(&self.deriv_slots) {
+            *d = scratch[s];
+        }
+    }
+
+    /// The outputs after [`CompiledModel::eval`].
+    #[inline]
+    pub fn read_outputs(&self, scratch: &[f64], y: &mut [f64]) {
+        for (o, &s) in y.iter_mut().zip(&self.output_slots) {
+            *o = scratch[s];
+        }
+    }
+
+    /// Every bond-graph variable's value at `(t, x, u)` (states, efforts,
+    /// flows, derivatives): the operating point the causal graph's signs use.
+    pub fn variable_values(&self, t: f64, x: &[f64], u: &[f64]) -> BTreeMap<Var, f64> {
+        let mut scratch = self.scratch();
+        self.eval(t, x, u, &mut scratch);
+        self.var_slots
+            .iter()
+            .map(|&(v, s)| (v, scratch[s]))
+            .collect()
+    }
+
+    /// Slot of input `j` in the scratch buffer (for drivers that write inputs in place).
+    pub fn input_slot(&self, j: usize) -> usize {
+        1 + self.n_states + j
+    }
+}
+
+/// True when an expression is affine in its slot leaves (vars, inputs)
+/// with constant coefficients: what makes the compiled model LTI.
+fn affine_in_slots(e: &Expr) -> bool {
+    fn constant(e: &Expr) -> bool {
+        match e {
+            Expr::Num(_) | Expr::Param(_) => true,
+            Expr::Var(_) | Expr::Input(_) | Expr::Local(_) | Expr::Time => false,
+            Expr::Neg(a) => constant(a),
+            Expr::Add(v) | Expr::Mul(v) => v.iter().all(constant),
+            Expr::Div(a, b) | Expr::Pow(a, b) => constant(a) && constant(b),
+            Expr::Call(_, v) => v.iter().all(constant),
+        }
+    }
+    match e {
+        Expr::Num(_) | Expr::Param(_) | Expr::Var(_) => true,
+        // An input is affine, but a source written as a function of time is not LTI.
+        Expr::Input(_) => true,
+        Expr::Local(_) | Expr::Time => false,
+        Expr::Neg(a) => affine_in_slots(a),
+        Expr::Add(v) => v.iter().all(affine_in_slots),
+        Expr::Mul(v) => {
+            let non_const = v.iter().filter(|x| !constant(x)).count();
+            non_const <= 1 && v.iter().all(affine_in_slots)
+        }
+        Expr::Div(a, b) => constant(b) && affine_in_slots(a),
+        Expr::Pow(a, b) => constant(a) && constant(b),
+        Expr::Call(_, v) => v.iter().all(constant),
+    }
+}

@@ -1,0 +1,334 @@
+//! Bond-graph elements: kinds, laws and parameters.
+
+use std::fmt;
+
+use crate::expr::Expr;
+
+/// The kind of a bond-graph element, in bond-graph notation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum ElementKind {
+    /// Effort source (a voltage, a torque).
+    Se,
+    /// Flow source (a current, a velocity).
+    Sf,
+    /// Dissipation: resistor, damper, friction.
+    R,
+    /// Capacitive storage: capacitor, spring. State: displacement `q`.
+    C,
+    /// Inertial storage: inductor, mass, inertia. State: momentum `p`.
+    I,
+    /// Transformer: `e_out = m e_in`, `f_in = m f_out`.
+    Tf,
+    /// Gyrator: `e_in = r f_out`, `e_out = r f_in`.
+    Gy,
+    /// Modulated transformer: a TF whose modulus follows an input signal.
+    Mtf,
+    /// Modulated gyrator: a GY whose modulus follows an input signal.
+    Mgy,
+    /// Common-effort junction (parallel connection).
+    Zero,
+    /// Common-flow junction (series connection).
+    One,
+}
+
+impl ElementKind {
+    /// All kinds, in the order the model file documents them.
+    pub const ALL: [ElementKind; 11] = [
+        ElementKind::Se,
+        ElementKind::Sf,
+        ElementKind::R,
+        ElementKind::C,
+        ElementKind::I,
+        ElementKind::Tf,
+        ElementKind::Gy,
+        ElementKind::Mtf,
+        ElementKind::Mgy,
+        ElementKind::Zero,
+        ElementKind::One,
+    ];
+
+    /// The name used in model files and printouts (`Se`, `TF`, `0`, `1`).
+    pub fn symbol(self) -> &'static str {
+        match self {
+            ElementKind::Se => "Se",
+            ElementKind::Sf => "Sf",
+            ElementKind::R => "R",
+            ElementKind::C => "C",
+            ElementKind::I => "I",
+            ElementKind::Tf => "TF",
+            ElementKind::Gy => "GY",
+            ElementKind::Mtf => "MTF",
+            ElementKind::Mgy => "MGY",
+            ElementKind::Zero => "0",
+            ElementKind::One => "1",
+        }
+    }
+
+    /// Parses the symbol written in model files.
+    pub fn from_symbol(s: &str) -> Option<ElementKind> {
+        ElementKind::ALL.into_iter().find(|k| k.symbol() == s)
+    }
+
+    /// Number of bonds the element takes (`None` for junctions: any number ≥ 1).
+    pub fn n_ports(self) -> Option<usize> {
+        match self {
+            ElementKind::Zero | ElementKind::One => None,
+            ElementKind::Tf | ElementKind::Gy | ElementKind::Mtf | ElementKind::Mgy => Some(2),
+            _ => Some(1),
+        }
+    }
+
+    /// True for 0 and 1 junctions.
+    pub fn is_junction(self) -> bool {
+        matches!(self, ElementKind::Zero | ElementKind::One)
+    }
+
+    /// True for sources.
+    pub fn is_source(self) -> bool {
+        matches!(self, ElementKind::Se | ElementKind::Sf)
+    }
+
+    /// True for storage elements (C, I).
+    pub fn is_storage(self) -> bool {
+        matches!(self, ElementKind::C | ElementKind::I)
+    }
+
+    /// True for two-port converters (TF, GY and their modulated forms).
+    pub fn is_two_port(self) -> bool {
+        matches!(
+            self,
+            ElementKind::Tf | ElementKind::Gy | ElementKind::Mtf | ElementKind::Mgy
+        )
+    }
+
+    /// True for transformers (TF, MTF).
+    pub fn is_transformer(self) -> bool {
+        matches!(self, ElementKind::Tf | ElementKind::Mtf)
+    }
+
+    /// True for gyrators (GY, MGY).
+    pub fn is_gyrator(self) -> bool {
+        matches!(self, ElementKind::Gy | ElementKind::Mgy)
+    }
+}
+
+impl fmt::Display for ElementKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.symbol())
+    }
+}
+
+/// The constitutive law of an element.
+///
+/// Laws are written for the bond variables of the element's own bond(s):
+/// - `Se`: `effort` is its effort; `Sf`: `flow` is its flow (expressions of
+///   inputs, parameters and time `t`).
+/// - `R`: linear `e = R f` with `R = coefficient`; or nonlinear `effort(f)`
+///   and/or `flow(e)`.
+/// - `C`: linear `e = q / C`; or nonlinear `effort(q)`.
+/// - `I`: linear `f = p / L`; or nonlinear `flow(p)` (a flux–current curve).
+/// - `TF`/`MTF`: modulus `m` with `e_out = m e_in`, `f_in = m f_out`.
+/// - `GY`/`MGY`: modulus `r` with `e_in = r f_out`, `e_out = r f_in`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Law {
+    /// Junctions have no law.
+    None,
+    /// The value a source imposes.
+    Source(Expr),
+    /// A linear law with this coefficient (resistance, capacitance, inertance, modulus).
+    Linear(Expr),
+    /// A nonlinear law: effort as a function of the flow (R) or
+    /// displacement (C), and/or flow as a function of the effort (R) or
+    /// momentum (I). Laws mention their own variable as `e`, `f`, `p` or `q`.
+    Nonlinear {
+        /// Effort law, if given.
+        effort: Option<Expr>,
+        /// Flow law, if given.
+        flow: Option<Expr>,
+    },
+}
+
+/// One element of a bond graph.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Element {
+    /// Unique name (`R`, `L`, `1e`).
+    pub name: String,
+    /// What the element is.
+    pub kind: ElementKind,
+    /// Its constitutive law.
+    pub law: Law,
+    /// A human description ("armature resistance").
+    pub description: String,
+}
+
+impl Element {
+    fn new(name: &str, kind: ElementKind, law: Law) -> Element {
+        Element {
+            name: name.to_string(),
+            kind,
+            law,
+            description: String::new(),
+        }
+    }
+
+    /// An effort source imposing the input or parameter called `value`.
+    pub fn se(name: &str, value: &str) -> Element {
+        Element::new(
+            name,
+            ElementKind::Se,
+            Law::Source(Expr::Param(value.to_string())),
+        )
+    }
+
+    /// A flow source imposing the input or parameter called `value`.
+    pub fn sf(name: &str, value: &str) -> Element {
+        Element::new(
+            name,
+            ElementKind::Sf,
+            Law::Source(Expr::Param(value.to_string())),
+        )
+    }
+
+    /// A linear resistor `e = R f` with the parameter called `param`.
+    pub fn r(name: &str, param: &str) -> Element {
+        Element::new(
+            name,
+            ElementKind::R,
+            Law::Linear(Expr::Param(param.to_string())),
+        )
+    }
+
+    /// A linear capacitor `e = q / C` with the parameter called `param`.
+    pub fn c(name: &str, param: &str) -> Element {
+        Element::new(
+            name,
+            ElementKind::C,
+            Law::Linear(Expr::Param(param.to_string())),
+        )
+    }
+
+    /// A linear inertia `f = p / L` with the parameter called `param`.
+    pub fn i(name: &str, param: &str) -> Element {
+        Element::new(
+            name,
+            ElementKind::I,
+            Law::Linear(Expr::Param(param.to_string())),
+        )
+    }
+
+    /// A transformer of modulus `param`.
+    pub fn tf(name: &str, param: &str) -> Element {
+        Element::new(
+            name,
+            ElementKind::Tf,
+            Law::Linear(Expr::Param(param.to_string())),
+        )
+    }
+
+    /// A gyrator of modulus `param`.
+    pub fn gy(name: &str, param: &str) -> Element {
+        Element::new(
+            name,
+            ElementKind::Gy,
+            Law::Linear(Expr::Param(param.to_string())),
+        )
+    }
+
+    /// A modulated transformer whose modulus is the input signal `signal`.
+    pub fn mtf(name: &str, signal: &str) -> Element {
+        Element::new(
+            name,
+            ElementKind::Mtf,
+            Law::Linear(Expr::Param(signal.to_string())),
+        )
+    }
+
+    /// A modulated gyrator whose modulus is the input signal `signal`.
+    pub fn mgy(name: &str, signal: &str) -> Element {
+        Element::new(
+            name,
+            ElementKind::Mgy,
+            Law::Linear(Expr::Param(signal.to_string())),
+        )
+    }
+
+    /// A 0-junction (common effort).
+    pub fn zero(name: &str) -> Element {
+        Element::new(name, ElementKind::Zero, Law::None)
+    }
+
+    /// A 1-junction (common flow).
+    pub fn one(name: &str) -> Element {
+        Element::new(name, ElementKind::One, Law::None)
+    }
+
+    /// An element with a nonlinear law (`effort` and/or `flow` given).
+    pub fn nonlinear(
+        name: &str,
+        kind: ElementKind,
+        effort: Option<Expr>,
+        flow: Option<Expr>,
+    ) -> Element {
+        Element::new(name, kind, Law::Nonlinear { effort, flow })
+    }
+
+    /// Sets the description.
+    #[must_use]
+    pub fn described(mut self, description: &str) -> Element {
+        self.description = description.to_string();
+        self
+    }
+}
+
+/// A named model parameter with its unit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Parameter {
+    /// Value in SI units.
+    pub value: f64,
+    /// Unit, as text (`Ohm`, `H`, `N m/A`).
+    pub unit: String,
+    /// A human description.
+    pub description: String,
+}
+
+/// A named input signal the model takes (a source value, a duty cycle).
+#[derive(Clone, Debug, PartialEq)]
+pub struct InputSignal {
+    /// Value used when no signal is given.
+    pub default: f64,
+    /// Unit, as text.
+    pub unit: String,
+    /// A human description.
+    pub description: String,
+}
+
+/// Which variable of the graph an output measures.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Measured {
+    /// The effort at an element: a 0-junction's common effort or a one-port's bond effort.
+    Effort(String),
+    /// The flow at an element: a 1-junction's common flow or a one-port's bond flow.
+    Flow(String),
+    /// The state of a storage element (momentum of an I, displacement of a C).
+    State(String),
+}
+
+impl Measured {
+    /// The element the output refers to.
+    pub fn element(&self) -> &str {
+        match self {
+            Measured::Effort(s) | Measured::Flow(s) | Measured::State(s) => s,
+        }
+    }
+}
+
+/// A measured output of the model (`i` = flow of the electrical 1-junction).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Output {
+    /// The output's name, as in recordings.
+    pub name: String,
+    /// What it measures.
+    pub measured: Measured,
+    /// Unit, as text.
+    pub unit: String,
+}

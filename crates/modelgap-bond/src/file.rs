@@ -1,0 +1,537 @@
+//! Model files: a bond graph as TOML that a person can write and read.
+//!
+//! ```toml
+//! name = "rc"
+//! description = "an RC circuit"
+//!
+//! [parameters]
+//! R = { value = 1000.0, unit = "Ohm", description = "resistor" }
+//! C = { value = 1e-6, unit = "F" }
+//!
+//! [inputs]
+//! V = { default = 5.0, unit = "V" }
+//!
+//! [[elements]]
+//! name = "V"
+//! kind = "Se"
+//! effort = "V"            # an input, a parameter or an expression of them and t
+//!
+//! [[elements]]
+//! name = "1"
+//! kind = "1"
+//!
+//! [[elements]]
+//! name = "R"
+//! kind = "R"
+//! parameter = "R"         # linear: e = R f; or `effort = "..."` in f / `flow = "..."` in e
+//!
+//! [[elements]]
+//! name = "C"
+//! kind = "C"
+//! parameter = "C"         # linear: e = q / C; or `effort = "..."` in q
+//!
+//! [[bonds]]               # numbered 1, 2, ... in this order; power from -> to
+//! from = "V"
+//! to = "1"
+//! [[bonds]]
+//! from = "1"
+//! to = "R"
+//! [[bonds]]
+//! from = "1"
+//! to = "C"
+//!
+//! [[outputs]]
+//! name = "i"
+//! flow = "1"              # or effort = "<element>", state = "<storage element>"
+//! unit = "A"
+//! ```
+//!
+//! Kinds: `Se Sf R C I TF GY MTF MGY 0 1`. For TF/GY/MTF/MGY, `parameter`
+//! (also spelt `modulus`) is the modulus; an MTF's modulus names an input.
+//! Every error names the line and column, and the element or bond.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use serde::Deserialize;
+use toml::Spanned;
+
+use crate::element::{Element, ElementKind, Law, Measured, Output};
+use crate::error::{BondError, Result};
+use crate::expr::{Expr, parse};
+use crate::graph::BondGraph;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ModelFile {
+    name: String,
+    #[serde(default)]
+    description: String,
+    #[serde(default)]
+    parameters: BTreeMap<String, Spanned<ParamEntry>>,
+    #[serde(default)]
+    inputs: BTreeMap<String, Spanned<InputEntry>>,
+    #[serde(default)]
+    elements: Vec<Spanned<ElementEntry>>,
+    #[serde(default)]
+    bonds: Vec<Spanned<BondEntry>>,
+    #[serde(default)]
+    outputs: Vec<Spanned<OutputEntry>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ParamEntry {
+    value: f64,
+    #[serde(default)]
+    unit: String,
+    #[serde(default)]
+    description: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct InputEntry {
+    default: f64,
+    #[serde(default)]
+    unit: String,
+    #[serde(default)]
+    description: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ElementEntry {
+    name: Spanned<String>,
+    kind: Spanned<String>,
+    parameter: Option<Spanned<String>>,
+    modulus: Option<Spanned<String>>,
+    effort: Option<Spanned<String>>,
+    flow: Option<Spanned<String>>,
+    #[serde(default)]
+    description: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BondEntry {
+    from: Spanned<String>,
+    to: Spanned<String>,
+    number: Option<Spanned<u32>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct OutputEntry {
+    name: String,
+    flow: Option<String>,
+    effort: Option<String>,
+    state: Option<String>,
+    #[serde(default)]
+    unit: String,
+}
+
+/// Line and column (1-based) of a byte offset in `src`.
+fn line_col(src: &str, offset: usize) -> (usize, usize) {
+    let before = &src[..offset.min(src.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before
+        .rfind('\n')
+        .map_or(before.chars().count(), |i| before[i + 1..].chars().count())
+        + 1;
+    (line, col)
+}
+
+struct Ctx<'a> {
+    src: &'a str,
+}
+
+impl Ctx<'_> {
+    fn err(&self, span: std::ops::Range<usize>, message: String) -> BondError {
+        let (line, column) = line_col(self.src, span.start);
+        BondError::File {
+            line,
+            column,
+            message,
+            path: None,
+        }
+    }
+
+    fn law(&self, element: &str, field: &str, text: &Spanned<String>) -> Result<Expr> {
+        parse(text.get_ref()).map_err(|e| {
+            // The span covers the quoted string: the law starts one column after it.
+            let (line, column) = line_col(self.src, text.span().start);
+            BondError::File {
+                line,
+                column: column + e.column,
+                message: format!(
+                    "element '{element}': cannot parse {field} law '{}': {}",
+                    text.get_ref(),
+                    e.message
+                ),
+                path: None,
+            }
+        })
+    }
+}
+
+/// Reads a model from TOML text.
+///
+/// # Errors
+/// [`BondError::File`] with the line and column of the problem: TOML
+/// syntax, unknown fields, unknown element kinds, laws that do not parse,
+/// bonds to unknown elements, wrong bond counts, unknown names in laws.
+pub fn read_model(src: &str) -> Result<BondGraph> {
+    let file: ModelFile = toml::from_str(src).map_err(|e| {
+        let (line, column) = e.span().map_or((1, 1), |s| line_col(src, s.start));
+        BondError::File {
+            line,
+            column,
+            message: e.message().trim().to_string(),
+            path: None,
+        }
+    })?;
+    let ctx = Ctx { src };
+    let mut g = BondGraph::new();
+    g.name = file.name;
+    g.description = file.description;
+    for (name, p) in &file.parameters {
+        let span = p.span();
+        let p = p.get_ref();
+        g.add_param(name, p.value, &p.unit, &p.description)
+            .map_err(|e| ctx.err(span, e.to_string()))?;
+    }
+    for (name, i) in &file.inputs {
+        let span = i.span();
+        let i = i.get_ref();
+        g.add_input(name, i.default, &i.unit, &i.description)
+            .map_err(|e| ctx.err(span, e.to_string()))?;
+    }
+    let mut element_spans = Vec::new();
+    for entry in &file.elements {
+        let span = entry.span();
+        let e = entry.get_ref();
+        let name = e.name.get_ref().clone();
+        let kind = ElementKind::from_symbol(e.kind.get_ref()).ok_or_else(|| {
+            ctx.err(
+                e.kind.span(),
+                format!(
+                    "element '{name}': unknown kind '{}' (expected one of {})",
+                    e.kind.get_ref(),
+                    ElementKind::ALL
+                        .iter()
+                        .map(|k| k.symbol())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )
+        })?;
+        let parameter = match (&e.parameter, &e.modulus) {
+            (Some(_), Some(m)) => {
+                return Err(ctx.err(
+                    m.span(),
+                    format!("element '{name}': give `parameter` or `modulus`, not both"),
+                ));
+            }
+            (Some(p), None) | (None, Some(p)) => Some(p),
+            (None, None) => None,
+        };
+        let law = if kind.is_junction() {
+            if let Some(x) = parameter.or(e.effort.as_ref()).or(e.flow.as_ref()) {
+                return Err(ctx.err(
+                    x.span(),
+                    format!("element '{name}': a junction takes no law"),
+                ));
+            }
+            Law::None
+        } else if kind.is_source() {
+            let (want, got, other) = match kind {
+                ElementKind::Se => ("effort", &e.effort, &e.flow),
+                _ => ("flow", &e.flow, &e.effort),
+            };
+            if let Some(x) = parameter.or(other.as_ref()) {
+                return Err(ctx.err(
+                    x.span(),
+                    format!("element '{name}': a {kind} source takes only `{want}`"),
+                ));
+            }
+            let text = got.as_ref().ok_or_else(|| {
+                ctx.err(
+                    span.clone(),
+                    format!("element '{name}': a {kind} source needs `{want} = \"...\"`"),
+                )
+            })?;
+            Law::Source(ctx.law(&name, want, text)?)
+        } else if let Some(p) = parameter {
+            if let Some(x) = e.effort.as_ref().or(e.flow.as_ref()) {
+                return Err(ctx.err(
+                    x.span(),
+                    format!("element '{name}': give a linear `parameter` or nonlinear `effort`/`flow` laws, not both"),
+                ));
+            }
+            Law::Linear(ctx.law(&name, "parameter", p)?)
+        } else if kind.is_two_port() {
+            return Err(ctx.err(
+                span.clone(),
+                format!("element '{name}': a {kind} needs `modulus = \"...\"`"),
+            ));
+        } else {
+            let effort = e
+                .effort
+                .as_ref()
+                .map(|t| ctx.law(&name, "effort", t))
+                .transpose()?;
+            let flow = e
+                .flow
+                .as_ref()
+                .map(|t| ctx.law(&name, "flow", t))
+                .transpose()?;
+            if effort.is_none() && flow.is_none() {
+                return Err(ctx.err(
+                    span.clone(),
+                    format!("element '{name}': a {kind} needs `parameter = \"...\"` or a nonlinear `effort`/`flow` law"),
+                ));
+            }
+            Law::Nonlinear { effort, flow }
+        };
+        let mut element = Element {
+            name: name.clone(),
+            kind,
+            law,
+            description: String::new(),
+        };
+        element.description = e.description.clone();
+        g.add(element)
+            .map_err(|err| ctx.err(e.name.span(), err.to_string()))?;
+        element_spans.push(e.name.span());
+    }
+    for (i, entry) in file.bonds.iter().enumerate() {
+        let b = entry.get_ref();
+        if let Some(n) = &b.number
+            && *n.get_ref() as usize != i + 1
+        {
+            return Err(ctx.err(
+                n.span(),
+                format!("bond number {} is out of order: bonds are numbered by position, this is bond {}", n.get_ref(), i + 1),
+            ));
+        }
+        for end in [&b.from, &b.to] {
+            if g.find(end.get_ref()).is_none() {
+                return Err(ctx.err(
+                    end.span(),
+                    format!("bond {}: unknown element '{}'", i + 1, end.get_ref()),
+                ));
+            }
+        }
+        g.bond_names(b.from.get_ref(), b.to.get_ref())
+            .map_err(|err| ctx.err(entry.span(), err.to_string()))?;
+    }
+    for entry in &file.outputs {
+        let o = entry.get_ref();
+        let measured = match (&o.flow, &o.effort, &o.state) {
+            (Some(f), None, None) => Measured::Flow(f.clone()),
+            (None, Some(e), None) => Measured::Effort(e.clone()),
+            (None, None, Some(s)) => Measured::State(s.clone()),
+            _ => {
+                return Err(ctx.err(
+                    entry.span(),
+                    format!("output '{}': give exactly one of `flow`, `effort`, `state` (an element name)", o.name),
+                ));
+            }
+        };
+        g.add_output(Output {
+            name: o.name.clone(),
+            measured,
+            unit: o.unit.clone(),
+        })
+        .map_err(|err| ctx.err(entry.span(), err.to_string()))?;
+    }
+    // Structural checks, located at the element they concern.
+    if let Err(err) = g.validate() {
+        let span = match &err {
+            BondError::BadPorts { element, .. }
+            | BondError::BadLaw { element, .. }
+            | BondError::UnknownName { element, .. } => g
+                .find(element)
+                .and_then(|id| element_spans.get(id.0 as usize).cloned()),
+            BondError::BadOutput { output, .. } => file
+                .outputs
+                .iter()
+                .find(|o| &o.get_ref().name == output)
+                .map(|o| o.span()),
+            _ => None,
+        };
+        return Err(match span {
+            Some(s) => ctx.err(s, err.to_string()),
+            None => err,
+        });
+    }
+    Ok(g)
+}
+
+/// Reads a model file.
+///
+/// # Errors
+/// As [`read_model`], with the path added; [`BondError::Io`] if it cannot be read.
+pub fn read_model_path(path: &Path) -> Result<BondGraph> {
+    let src = std::fs::read_to_string(path).map_err(|source| BondError::Io {
+        message: format!("cannot read model file {}", path.display()),
+        source,
+    })?;
+    read_model(&src).map_err(|e| match e {
+        BondError::File {
+            line,
+            column,
+            message,
+            ..
+        } => BondError::File {
+            line,
+            column,
+            message,
+            path: Some(path.to_path_buf()),
+        },
+        other => other,
+    })
+}
+
+fn q(s: &str) -> String {
+    toml::Value::String(s.to_string()).to_string()
+}
+
+fn key(s: &str) -> String {
+    if !s.is_empty()
+        && s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    {
+        s.to_string()
+    } else {
+        q(s)
+    }
+}
+
+fn num(v: f64) -> String {
+    let s = format!("{v:?}");
+    if s.contains('.') || s.contains('e') || s.contains("inf") || s.contains("NaN") {
+        s
+    } else {
+        format!("{s}.0")
+    }
+}
+
+/// Writes a model as TOML that [`read_model`] reads back to an equal graph.
+pub fn write_model(g: &BondGraph) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "name = {}", q(&g.name));
+    if !g.description.is_empty() {
+        let _ = writeln!(s, "description = {}", q(&g.description));
+    }
+    if !g.params().is_empty() {
+        let _ = writeln!(s, "\n[parameters]");
+        for (name, p) in g.params() {
+            let _ = write!(
+                s,
+                "{} = {{ value = {}, unit = {}",
+                key(name),
+                num(p.value),
+                q(&p.unit)
+            );
+            if !p.description.is_empty() {
+                let _ = write!(s, ", description = {}", q(&p.description));
+            }
+            s.push_str(" }\n");
+        }
+    }
+    if !g.inputs().is_empty() {
+        let _ = writeln!(s, "\n[inputs]");
+        for (name, i) in g.inputs() {
+            let _ = write!(
+                s,
+                "{} = {{ default = {}, unit = {}",
+                key(name),
+                num(i.default),
+                q(&i.unit)
+            );
+            if !i.description.is_empty() {
+                let _ = write!(s, ", description = {}", q(&i.description));
+            }
+            s.push_str(" }\n");
+        }
+    }
+    for el in g.elements() {
+        let _ = writeln!(
+            s,
+            "\n[[elements]]\nname = {}\nkind = {}",
+            q(&el.name),
+            q(el.kind.symbol())
+        );
+        match &el.law {
+            Law::None => {}
+            Law::Source(v) => {
+                let field = if el.kind == ElementKind::Se {
+                    "effort"
+                } else {
+                    "flow"
+                };
+                let _ = writeln!(s, "{field} = {}", q(&v.to_string()));
+            }
+            Law::Linear(p) => {
+                let field = if el.kind.is_two_port() {
+                    "modulus"
+                } else {
+                    "parameter"
+                };
+                let _ = writeln!(s, "{field} = {}", q(&p.to_string()));
+            }
+            Law::Nonlinear { effort, flow } => {
+                if let Some(e) = effort {
+                    let _ = writeln!(s, "effort = {}", q(&e.to_string()));
+                }
+                if let Some(f) = flow {
+                    let _ = writeln!(s, "flow = {}", q(&f.to_string()));
+                }
+            }
+        }
+        if !el.description.is_empty() {
+            let _ = writeln!(s, "description = {}", q(&el.description));
+        }
+    }
+    if !g.bonds().is_empty() {
+        s.push('\n');
+    }
+    for (i, b) in g.bonds().iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "[[bonds]]\nnumber = {}\nfrom = {}\nto = {}",
+            i + 1,
+            q(&g.element(b.from).name),
+            q(&g.element(b.to).name)
+        );
+    }
+    for o in g.outputs() {
+        let (field, el) = match &o.measured {
+            Measured::Flow(e) => ("flow", e),
+            Measured::Effort(e) => ("effort", e),
+            Measured::State(e) => ("state", e),
+        };
+        let _ = writeln!(
+            s,
+            "\n[[outputs]]\nname = {}\n{field} = {}\nunit = {}",
+            q(&o.name),
+            q(el),
+            q(&o.unit)
+        );
+    }
+    s
+}
+
+/// Writes a model file.
+///
+/// # Errors
+/// [`BondError::Io`] if the file cannot be written.
+pub fn write_model_path(g: &BondGraph, path: &Path) -> Result<()> {
+    std::fs::write(path, write_model(g)).map_err(|source| BondError::Io {
+        message: format!("cannot write model file {}", path.display()),
+        source,
+    })
+}

@@ -1,0 +1,581 @@
+//! The bond graph: elements joined by bonds, with parameters, inputs and outputs.
+//!
+//! # Sign convention
+//!
+//! Every bond carries a half-arrow from `from` to `to`: power `e·f` is
+//! positive when it flows in that direction. At a junction, bonds pointing
+//! in count `+`, bonds pointing out count `−` (`Σ± e = 0` at a 1-junction,
+//! `Σ± f = 0` at a 0-junction). R, C and I elements must have their bond
+//! pointing into them (they absorb power); sources may point either way
+//! (a load torque source with its bond pointing into it opposes motion).
+//! Under this convention the DC motor `Se:V → 1 → GY:k → 1 → I:J` with
+//! positive `V` and positive `k` spins forward (`ω > 0`).
+
+use std::collections::BTreeMap;
+use std::fmt;
+
+use crate::element::{Element, ElementKind, InputSignal, Law, Output, Parameter};
+use crate::error::{BondError, Result};
+use crate::expr::Expr;
+
+/// Index of an element in its graph. Ids are append-only: edits keep old ids valid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct ElementId(pub u32);
+
+/// Index of a bond in its graph. Displayed as the bond number (index + 1),
+/// so bonds added in order are numbered 1, 2, … as in the paper's figures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct BondId(pub u32);
+
+impl BondId {
+    /// The bond's number in equations (`e3`, `f3`): index + 1.
+    pub fn number(self) -> u32 {
+        self.0 + 1
+    }
+
+    /// The bond with this number (1-based).
+    pub fn from_number(n: u32) -> Option<BondId> {
+        n.checked_sub(1).map(BondId)
+    }
+
+    fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+impl fmt::Display for BondId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.number())
+    }
+}
+
+/// A bond, with its power direction from `from` to `to`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Bond {
+    /// The element the half-arrow starts at.
+    pub from: ElementId,
+    /// The element the half-arrow points to.
+    pub to: ElementId,
+}
+
+/// Whether a bond points into or out of an element.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Direction {
+    /// The half-arrow points into the element.
+    In,
+    /// The half-arrow points away from the element.
+    Out,
+}
+
+impl Direction {
+    /// `+1` for `In`, `−1` for `Out`: the sign a junction gives the bond.
+    pub fn sign(self) -> f64 {
+        match self {
+            Direction::In => 1.0,
+            Direction::Out => -1.0,
+        }
+    }
+}
+
+/// A bond graph with its parameters, input signals and measured outputs.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BondGraph {
+    /// Model name (`dc-motor`).
+    pub name: String,
+    /// Human description.
+    pub description: String,
+    elements: Vec<Element>,
+    bonds: Vec<Bond>,
+    params: BTreeMap<String, Parameter>,
+    inputs: BTreeMap<String, InputSignal>,
+    outputs: Vec<Output>,
+}
+
+impl BondGraph {
+    /// An empty graph.
+    pub fn new() -> BondGraph {
+        BondGraph::default()
+    }
+
+    /// Adds an element and returns its id.
+    ///
+    /// # Errors
+    /// [`BondError::DuplicateElement`] if the name is taken.
+    pub fn add(&mut self, element: Element) -> Result<ElementId> {
+        if self.find(&element.name).is_some() {
+            return Err(BondError::DuplicateElement { name: element.name });
+        }
+        self.elements.push(element);
+        Ok(ElementId(self.elements.len() as u32 - 1))
+    }
+
+    /// Adds a bond with power flowing from `from` to `to`; its number is the
+    /// number of bonds so far plus one.
+    ///
+    /// # Errors
+    /// [`BondError::UnknownElement`] for an id not in this graph, or
+    /// [`BondError::BadPorts`] for a bond from an element to itself.
+    pub fn bond(&mut self, from: ElementId, to: ElementId) -> Result<BondId> {
+        for id in [from, to] {
+            if id.0 as usize >= self.elements.len() {
+                return Err(BondError::UnknownElement {
+                    name: format!("#{}", id.0),
+                    context: format!(" in bond {}", self.bonds.len() + 1),
+                });
+            }
+        }
+        if from == to {
+            let e = &self.elements[from.0 as usize];
+            return Err(BondError::BadPorts {
+                element: e.name.clone(),
+                kind: e.kind.to_string(),
+                detail: format!("cannot be bonded to itself (bond {})", self.bonds.len() + 1),
+            });
+        }
+        self.bonds.push(Bond { from, to });
+        Ok(BondId(self.bonds.len() as u32 - 1))
+    }
+
+    /// Adds a bond between two elements given by name.
+    ///
+    /// # Errors
+    /// As [`BondGraph::bond`], and [`BondError::UnknownElement`] for a name not found.
+    pub fn bond_names(&mut self, from: &str, to: &str) -> Result<BondId> {
+        let n = self.bonds.len() + 1;
+        let lookup = |g: &BondGraph, name: &str| {
+            g.find(name).ok_or_else(|| BondError::UnknownElement {
+                name: name.to_string(),
+                context: format!(" in bond {n}"),
+            })
+        };
+        let a = lookup(self, from)?;
+        let b = lookup(self, to)?;
+        self.bond(a, b)
+    }
+
+    /// Declares or replaces a parameter.
+    ///
+    /// # Errors
+    /// [`BondError::BadParameter`] for a non-finite value, [`BondError::NameClash`]
+    /// if an input has the same name.
+    pub fn add_param(
+        &mut self,
+        name: &str,
+        value: f64,
+        unit: &str,
+        description: &str,
+    ) -> Result<()> {
+        if !value.is_finite() {
+            return Err(BondError::BadParameter {
+                name: name.to_string(),
+                value,
+            });
+        }
+        if self.inputs.contains_key(name) {
+            return Err(BondError::NameClash {
+                name: name.to_string(),
+                detail: "declared as an input and as a parameter".to_string(),
+            });
+        }
+        self.params.insert(
+            name.to_string(),
+            Parameter {
+                value,
+                unit: unit.to_string(),
+                description: description.to_string(),
+            },
+        );
+        Ok(())
+    }
+
+    /// Declares or replaces an input signal with its default value.
+    ///
+    /// # Errors
+    /// [`BondError::BadParameter`] for a non-finite default, [`BondError::NameClash`]
+    /// if a parameter has the same name.
+    pub fn add_input(
+        &mut self,
+        name: &str,
+        default: f64,
+        unit: &str,
+        description: &str,
+    ) -> Result<()> {
+        if !default.is_finite() {
+            return Err(BondError::BadParameter {
+                name: name.to_string(),
+                value: default,
+            });
+        }
+        if self.params.contains_key(name) {
+            return Err(BondError::NameClash {
+                name: name.to_string(),
+                detail: "declared as a parameter and as an input".to_string(),
+            });
+        }
+        self.inputs.insert(
+            name.to_string(),
+            InputSignal {
+                default,
+                unit: unit.to_string(),
+                description: description.to_string(),
+            },
+        );
+        Ok(())
+    }
+
+    /// Declares a measured output.
+    ///
+    /// # Errors
+    /// [`BondError::BadOutput`] if the name is taken.
+    pub fn add_output(&mut self, output: Output) -> Result<()> {
+        if self.outputs.iter().any(|o| o.name == output.name) {
+            return Err(BondError::BadOutput {
+                output: output.name,
+                detail: "is declared twice".to_string(),
+            });
+        }
+        self.outputs.push(output);
+        Ok(())
+    }
+
+    /// Sets an existing parameter's value (`--set R=1.2`).
+    ///
+    /// # Errors
+    /// [`BondError::UnknownParameter`] listing the known names, or
+    /// [`BondError::BadParameter`] for a non-finite value.
+    pub fn set_param(&mut self, name: &str, value: f64) -> Result<()> {
+        if !value.is_finite() {
+            return Err(BondError::BadParameter {
+                name: name.to_string(),
+                value,
+            });
+        }
+        if let Some(p) = self.params.get_mut(name) {
+            p.value = value;
+            return Ok(());
+        }
+        if let Some(i) = self.inputs.get_mut(name) {
+            i.default = value;
+            return Ok(());
+        }
+        Err(BondError::UnknownParameter {
+            name: name.to_string(),
+            known: self
+                .params
+                .keys()
+                .chain(self.inputs.keys())
+                .cloned()
+                .collect::<Vec<_>>()
+                .join(", "),
+        })
+    }
+
+    /// A parameter's value.
+    ///
+    /// # Errors
+    /// [`BondError::UnknownParameter`].
+    pub fn param(&self, name: &str) -> Result<f64> {
+        self.params
+            .get(name)
+            .map(|p| p.value)
+            .ok_or_else(|| BondError::UnknownParameter {
+                name: name.to_string(),
+                known: self.params.keys().cloned().collect::<Vec<_>>().join(", "),
+            })
+    }
+
+    /// All parameters, by name.
+    pub fn params(&self) -> &BTreeMap<String, Parameter> {
+        &self.params
+    }
+
+    /// All input signals, by name.
+    pub fn inputs(&self) -> &BTreeMap<String, InputSignal> {
+        &self.inputs
+    }
+
+    /// The measured outputs, in declaration order.
+    pub fn outputs(&self) -> &[Output] {
+        &self.outputs
+    }
+
+    /// All elements, indexed by [`ElementId`].
+    pub fn elements(&self) -> &[Element] {
+        &self.elements
+    }
+
+    /// All bonds, indexed by [`BondId`].
+    pub fn bonds(&self) -> &[Bond] {
+        &self.bonds
+    }
+
+    /// Ids of all bonds.
+    pub fn bond_ids(&self) -> impl Iterator<Item = BondId> + '_ {
+        (0..self.bonds.len() as u32).map(BondId)
+    }
+
+    /// Ids of all elements.
+    pub fn element_ids(&self) -> impl Iterator<Item = ElementId> + '_ {
+        (0..self.elements.len() as u32).map(ElementId)
+    }
+
+    /// The element with this id.
+    ///
+    /// # Panics
+    /// If the id is not from this graph (a bug: ids are only handed out by `add`).
+    pub fn element(&self, id: ElementId) -> &Element {
+        &self.elements[id.0 as usize]
+    }
+
+    /// Mutable access to an element (to change its law or description).
+    pub fn element_mut(&mut self, id: ElementId) -> &mut Element {
+        &mut self.elements[id.0 as usize]
+    }
+
+    /// The bond with this id.
+    pub fn bond_at(&self, id: BondId) -> Bond {
+        self.bonds[id.index()]
+    }
+
+    /// The element called `name`.
+    pub fn find(&self, name: &str) -> Option<ElementId> {
+        self.elements
+            .iter()
+            .position(|e| e.name == name)
+            .map(|i| ElementId(i as u32))
+    }
+
+    /// The element called `name`, or an error saying where it was needed.
+    ///
+    /// # Errors
+    /// [`BondError::UnknownElement`].
+    pub fn require(&self, name: &str, context: &str) -> Result<ElementId> {
+        self.find(name).ok_or_else(|| BondError::UnknownElement {
+            name: name.to_string(),
+            context: context.to_string(),
+        })
+    }
+
+    /// The bonds of an element with their direction seen from it, in bond order.
+    pub fn ports(&self, id: ElementId) -> Vec<(BondId, Direction)> {
+        let mut out = Vec::new();
+        for (i, b) in self.bonds.iter().enumerate() {
+            if b.to == id {
+                out.push((BondId(i as u32), Direction::In));
+            }
+            if b.from == id {
+                out.push((BondId(i as u32), Direction::Out));
+            }
+        }
+        out
+    }
+
+    /// The element at the other end of a bond.
+    pub fn other_end(&self, bond: BondId, id: ElementId) -> ElementId {
+        let b = self.bonds[bond.index()];
+        if b.from == id { b.to } else { b.from }
+    }
+
+    /// The law of an element with names resolved: a name declared as an
+    /// input becomes [`Expr::Input`]; parameters stay [`Expr::Param`].
+    pub fn resolved(&self, expr: &Expr) -> Expr {
+        expr.map(&mut |e| match e {
+            Expr::Param(name) if self.inputs.contains_key(name) => Some(Expr::Input(name.clone())),
+            _ => None,
+        })
+    }
+
+    /// Checks the structure: bond counts and directions per element kind,
+    /// laws present where needed, names in laws declared, outputs pointing
+    /// at something that has the variable.
+    ///
+    /// # Errors
+    /// The first problem found, naming the element, bond or output.
+    pub fn validate(&self) -> Result<()> {
+        if self.elements.is_empty() {
+            return Err(BondError::BadLaw {
+                element: self.name.clone(),
+                detail: "the model has no elements".to_string(),
+            });
+        }
+        for id in self.element_ids() {
+            self.validate_element(id)?;
+        }
+        for out in &self.outputs {
+            let id = self
+                .find(out.measured.element())
+                .ok_or_else(|| BondError::BadOutput {
+                    output: out.name.clone(),
+                    detail: format!("refers to unknown element '{}'", out.measured.element()),
+                })?;
+            let el = self.element(id);
+            use crate::element::Measured;
+            let ok = match (&out.measured, el.kind) {
+                (Measured::State(_), k) => k.is_storage(),
+                (Measured::Effort(_), ElementKind::One) => false,
+                (Measured::Flow(_), ElementKind::Zero) => false,
+                (_, k) => !k.is_two_port(),
+            };
+            if !ok {
+                return Err(BondError::BadOutput {
+                    output: out.name.clone(),
+                    detail: format!(
+                        "element '{}' ({}) has no single {} (a 1-junction has a common flow, a 0-junction a common effort, storage elements a state)",
+                        el.name,
+                        el.kind,
+                        match out.measured {
+                            Measured::Effort(_) => "effort",
+                            Measured::Flow(_) => "flow",
+                            Measured::State(_) => "state",
+                        }
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn validate_element(&self, id: ElementId) -> Result<()> {
+        let el = self.element(id);
+        let ports = self.ports(id);
+        let bad = |detail: String| BondError::BadPorts {
+            element: el.name.clone(),
+            kind: el.kind.to_string(),
+            detail,
+        };
+        let list = |ports: &[(BondId, Direction)]| {
+            ports
+                .iter()
+                .map(|(b, _)| b.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        match el.kind.n_ports() {
+            Some(n) if ports.len() != n => {
+                return Err(bad(format!(
+                    "needs exactly {n} bond{}, has {}{}",
+                    if n == 1 { "" } else { "s" },
+                    ports.len(),
+                    if ports.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" (bonds {})", list(&ports))
+                    }
+                )));
+            }
+            None if ports.is_empty() => return Err(bad("has no bonds".to_string())),
+            _ => {}
+        }
+        if matches!(el.kind, ElementKind::R | ElementKind::C | ElementKind::I)
+            && ports[0].1 != Direction::In
+        {
+            return Err(bad(format!(
+                "must have its bond pointing into it (power in), but bond {} points out",
+                ports[0].0
+            )));
+        }
+        if el.kind.is_two_port() {
+            let n_in = ports.iter().filter(|p| p.1 == Direction::In).count();
+            if n_in != 1 {
+                return Err(bad(format!(
+                    "needs one bond in and one out (power through it), has {n_in} in (bonds {})",
+                    list(&ports)
+                )));
+            }
+        }
+        // Laws: present where needed, names declared.
+        let exprs: Vec<(&str, &Expr)> = match (&el.law, el.kind) {
+            (Law::None, k) if k.is_junction() => vec![],
+            (Law::Source(e), k) if k.is_source() => vec![("value", e)],
+            (Law::Linear(e), k) if !k.is_junction() && !k.is_source() => vec![("parameter", e)],
+            (Law::Nonlinear { effort, flow }, ElementKind::R | ElementKind::C | ElementKind::I) => {
+                let mut v = Vec::new();
+                if let Some(e) = effort {
+                    v.push(("effort", e));
+                }
+                if let Some(f) = flow {
+                    v.push(("flow", f));
+                }
+                if v.is_empty() {
+                    return Err(BondError::BadLaw {
+                        element: el.name.clone(),
+                        detail: "a nonlinear law needs `effort` or `flow`".to_string(),
+                    });
+                }
+                match el.kind {
+                    ElementKind::C if effort.is_none() => {
+                        return Err(BondError::BadLaw {
+                            element: el.name.clone(),
+                            detail: "a nonlinear C needs `effort = \"...(q)\"`".to_string(),
+                        });
+                    }
+                    ElementKind::I if flow.is_none() => {
+                        return Err(BondError::BadLaw {
+                            element: el.name.clone(),
+                            detail: "a nonlinear I needs `flow = \"...(p)\"`".to_string(),
+                        });
+                    }
+                    _ => {}
+                }
+                v
+            }
+            (law, k) => {
+                return Err(BondError::BadLaw {
+                    element: el.name.clone(),
+                    detail: format!("a {k} element cannot have a law of the form {law:?}"),
+                });
+            }
+        };
+        for (field, e) in exprs {
+            for name in e.params() {
+                if !self.params.contains_key(&name) && !self.inputs.contains_key(&name) {
+                    return Err(BondError::UnknownName {
+                        element: el.name.clone(),
+                        name,
+                    });
+                }
+            }
+            let allowed: &[&str] = match (el.kind, field) {
+                (ElementKind::R, "effort") => &["f"],
+                (ElementKind::R, "flow") => &["e"],
+                (ElementKind::C, "effort") => &["q"],
+                (ElementKind::I, "flow") => &["p"],
+                _ => &[],
+            };
+            for local in e.locals() {
+                if !allowed.contains(&local.as_str()) {
+                    return Err(BondError::BadLaw {
+                        element: el.name.clone(),
+                        detail: format!(
+                            "its {field} law uses '{local}', but may only use {}",
+                            if allowed.is_empty() {
+                                "parameters, inputs and t".to_string()
+                            } else {
+                                format!("'{}', parameters, inputs and t", allowed.join("', '"))
+                            }
+                        ),
+                    });
+                }
+            }
+            let modulated = !e.inputs().is_empty()
+                || e.depends_on_time()
+                || !self.resolved(e).inputs().is_empty();
+            if matches!(el.kind, ElementKind::Tf | ElementKind::Gy) && modulated {
+                return Err(BondError::BadLaw {
+                    element: el.name.clone(),
+                    detail: format!(
+                        "a {} modulus may not depend on inputs or time; use M{}",
+                        el.kind, el.kind
+                    ),
+                });
+            }
+            if matches!(el.kind, ElementKind::Mtf | ElementKind::Mgy) && !modulated {
+                return Err(BondError::BadLaw {
+                    element: el.name.clone(),
+                    detail: format!("a {} modulus must follow an input signal", el.kind),
+                });
+            }
+        }
+        Ok(())
+    }
+}

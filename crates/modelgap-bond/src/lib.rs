@@ -1,0 +1,28 @@
+//! Bond graphs: modelling, causality, equations, simulation and fault diagnosis.
+
+pub mod causality;
+pub mod compiled;
+pub mod element;
+pub mod equations;
+pub mod error;
+pub mod expr;
+pub mod file;
+pub mod graph;
+pub mod library;
+pub mod notation;
+pub mod ode;
+pub mod simulate;
+pub mod state_space;
+
+pub use causality::{Causality, assign_causality};
+pub use compiled::CompiledModel;
+pub use element::{Element, ElementKind, Law, Measured, Output};
+pub use equations::Equations;
+pub use error::{BondError, Result};
+pub use graph::{BondGraph, BondId, ElementId};
+pub use state_space::StateSpace;
+pub mod causal_graph;
+pub mod diagnosis;
+pub mod fault_tree;
+pub mod qual;
+pub mod signature;

@@ -1,0 +1,284 @@
+//! Temporal signatures (Mosterman & Biswas): how an abrupt parameter fault
+//! shows in each measurement at its onset — the sign of the jump in the
+//! magnitude, the first and the second derivative.
+//!
+//! Prediction walks the causal graph forward from the faulty parameter:
+//! crossing an integrating edge (a storage element) moves the effect one
+//! derivative order up. Effects that only arrive through the integration of
+//! a fast storage element (its local time constant below a threshold) are
+//! over before a detector can see them and are discarded (the paper's
+//! Table 6). Observation reads the same three signs off a residual right
+//! after detection.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::fmt;
+
+use crate::causal_graph::CausalGraph;
+use crate::expr::Var;
+use crate::fault_tree::Hypothesis;
+use crate::qual::Qual;
+
+/// One component of a predicted signature.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Sym {
+    /// Decrease.
+    Minus,
+    /// No change at this order.
+    Zero,
+    /// Increase.
+    Plus,
+    /// Opposite effects meet: the sign cannot be told qualitatively.
+    Ambiguous,
+    /// Only through fast dynamics: not observable, not used for matching.
+    Discarded,
+}
+
+impl Sym {
+    fn of(q: Qual) -> Sym {
+        match q {
+            Qual::Minus => Sym::Minus,
+            Qual::Zero => Sym::Zero,
+            Qual::Plus => Sym::Plus,
+        }
+    }
+
+    fn add(self, other: Sym) -> Sym {
+        match (self, other) {
+            (Sym::Zero, x) | (x, Sym::Zero) => x,
+            (a, b) if a == b => a,
+            _ => Sym::Ambiguous,
+        }
+    }
+
+    fn times(self, q: Qual) -> Sym {
+        match (self, q) {
+            (_, Qual::Zero) => Sym::Zero,
+            (s, Qual::Plus) => s,
+            (Sym::Plus, Qual::Minus) => Sym::Minus,
+            (Sym::Minus, Qual::Minus) => Sym::Plus,
+            (s, Qual::Minus) => s,
+        }
+    }
+
+    /// The qualitative value, if the symbol is a definite sign.
+    pub fn qual(self) -> Option<Qual> {
+        match self {
+            Sym::Minus => Some(Qual::Minus),
+            Sym::Zero => Some(Qual::Zero),
+            Sym::Plus => Some(Qual::Plus),
+            _ => None,
+        }
+    }
+}
+
+impl fmt::Display for Sym {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Sym::Minus => "-",
+            Sym::Zero => "0",
+            Sym::Plus => "+",
+            Sym::Ambiguous => "?",
+            Sym::Discarded => "*",
+        })
+    }
+}
+
+/// Number of orders in a signature: magnitude, first and second derivative.
+pub const ORDERS: usize = 3;
+
+/// The predicted signature of one fault on one measurement.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Signature {
+    /// The measurement.
+    pub output: String,
+    /// Magnitude, first-derivative and second-derivative symbols.
+    pub orders: [Sym; ORDERS],
+}
+
+impl Signature {
+    /// The first order with a definite or ambiguous effect, with its symbol
+    /// (discarded and zero orders skipped).
+    pub fn first_effect(&self) -> Option<(usize, Sym)> {
+        self.orders
+            .iter()
+            .copied()
+            .enumerate()
+            .find(|(_, s)| !matches!(s, Sym::Zero | Sym::Discarded))
+    }
+}
+
+impl fmt::Display for Signature {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{}: ({}, {}, {})",
+            self.output, self.orders[0], self.orders[1], self.orders[2]
+        )
+    }
+}
+
+/// Predicts the signature of `fault` on every measured output.
+///
+/// `fast` lists the states (`p3`) whose local time constant is too small for
+/// their integrations to be observed; effects that need them are discarded.
+pub fn predict(cg: &CausalGraph, fault: &Hypothesis, fast: &BTreeSet<Var>) -> Vec<Signature> {
+    let full = propagate(cg, fault, &BTreeSet::new());
+    let slow = if fast.is_empty() {
+        full.clone()
+    } else {
+        propagate(cg, fault, fast)
+    };
+    cg.measured
+        .iter()
+        .map(|(name, v)| {
+            let mut orders = [Sym::Zero; ORDERS];
+            for (j, o) in orders.iter_mut().enumerate() {
+                let f = full[j].get(v).copied().unwrap_or(Sym::Zero);
+                let s = slow[j].get(v).copied().unwrap_or(Sym::Zero);
+                *o = if f != Sym::Zero && s == Sym::Zero {
+                    Sym::Discarded
+                } else {
+                    s
+                };
+            }
+            Signature {
+                output: name.clone(),
+                orders,
+            }
+        })
+        .collect()
+}
+
+/// Per-order forward propagation; integrations of states in `cut` are blocked.
+fn propagate(cg: &CausalGraph, fault: &Hypothesis, cut: &BTreeSet<Var>) -> Vec<BTreeMap<Var, Sym>> {
+    let order = algebraic_order(cg);
+    let mut out: Vec<BTreeMap<Var, Sym>> = Vec::with_capacity(ORDERS);
+    for j in 0..ORDERS {
+        let mut val: BTreeMap<Var, Sym> = BTreeMap::new();
+        if j == 0 {
+            for e in cg.param_effects.iter().filter(|e| e.param == fault.param) {
+                let s = Sym::of(e.sign * fault.deviation);
+                let cur = val.get(&e.on).copied().unwrap_or(Sym::Zero);
+                val.insert(e.on, cur.add(s));
+            }
+        }
+        for &v in &order {
+            let mut acc = val.get(&v).copied().unwrap_or(Sym::Zero);
+            for e in cg.antecedents(v) {
+                let src = if e.integrating {
+                    if j == 0 || cut.contains(&e.to) {
+                        Sym::Zero
+                    } else {
+                        out[j - 1].get(&e.from).copied().unwrap_or(Sym::Zero)
+                    }
+                } else {
+                    val.get(&e.from).copied().unwrap_or(Sym::Zero)
+                };
+                acc = acc.add(src.times(e.sign));
+            }
+            val.insert(v, acc);
+        }
+        out.push(val);
+    }
+    out
+}
+
+/// Variables in an order where every algebraic antecedent comes first
+/// (states first: they have only integrating antecedents).
+fn algebraic_order(cg: &CausalGraph) -> Vec<Var> {
+    let mut done: BTreeSet<Var> = BTreeSet::new();
+    let mut order = Vec::with_capacity(cg.nodes.len());
+    loop {
+        let mut progressed = false;
+        for &v in &cg.nodes {
+            if done.contains(&v) {
+                continue;
+            }
+            if cg
+                .antecedents(v)
+                .all(|e| e.integrating || done.contains(&e.from))
+            {
+                done.insert(v);
+                order.push(v);
+                progressed = true;
+            }
+        }
+        if !progressed {
+            break;
+        }
+    }
+    // Anything left sits on an algebraic loop (the equations' sort refuses
+    // those, so this is defensive): append in node order.
+    for &v in &cg.nodes {
+        if !done.contains(&v) {
+            order.push(v);
+        }
+    }
+    order
+}
+
+/// What a residual shows right after detection.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ObservedSignature {
+    /// The measurement.
+    pub output: String,
+    /// Sign of the deviation (0 while the residual is still inside its band).
+    pub magnitude: Qual,
+    /// True when the residual jumped out of its band within a sample or two
+    /// of the fault onset (a discontinuity: a magnitude-order effect).
+    pub jump: bool,
+    /// Sign of the residual's slope at detection.
+    pub slope: Qual,
+}
+
+impl fmt::Display for ObservedSignature {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{}: {}{} slope {}",
+            self.output,
+            self.magnitude,
+            if self.jump { " (jump)" } else { "" },
+            self.slope
+        )
+    }
+}
+
+/// True when a predicted signature agrees with an observed one.
+///
+/// - A definite first effect of order 0 (a jump) needs an observed jump of
+///   the same sign; an observed jump needs a predicted order-0 effect.
+/// - A first effect of order ≥ 1 needs the observed deviation (when there is
+///   one) to have its sign, and no observed jump; for order 1 the observed
+///   slope, when definite, must agree too.
+/// - Ambiguous components match anything; an output with no predicted
+///   effect must show no deviation.
+pub fn matches(predicted: &Signature, observed: &ObservedSignature) -> bool {
+    let Some((k, s)) = predicted.first_effect() else {
+        // Nothing predicted (or only discarded effects): any small deviation
+        // could come from the discarded fast part; a jump cannot.
+        let only_discarded = predicted.orders.contains(&Sym::Discarded);
+        return observed.magnitude == Qual::Zero || only_discarded && !observed.jump;
+    };
+    let Some(q) = s.qual() else {
+        return true; // ambiguous
+    };
+    if k == 0 {
+        return observed.magnitude == Qual::Zero && !observed.jump
+            || observed.jump && observed.magnitude == q;
+    }
+    if observed.jump {
+        return false;
+    }
+    if observed.magnitude != Qual::Zero && observed.magnitude != q {
+        return false;
+    }
+    if k == 1
+        && observed.slope != Qual::Zero
+        && observed.magnitude == Qual::Zero
+        && observed.slope != q
+    {
+        return false;
+    }
+    true
+}

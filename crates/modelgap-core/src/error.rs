@@ -1,0 +1,503 @@
+//! The error type of modelgap-core and its `Result` alias.
+//!
+//! Every variant carries the facts a user needs to fix the input: where the problem is (a
+//! [`Location`]: a CSV line, a sample index or an MCAP message index), which column or field,
+//! what was found, and, last in the message, the file when it is known.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// `Result` with [`CoreError`] as the default error type.
+pub type Result<T, E = CoreError> = std::result::Result<T, E>;
+
+/// Where in the input a problem sits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Location {
+    /// A line of a text file, counted from 1 as editors do (comment and blank lines count).
+    Line(usize),
+    /// A sample of a recording, counted from 0 (an index into [`crate::Recording::t`]).
+    Sample(usize),
+    /// A message on the read topic of an MCAP file, counted from 0 in file order.
+    Message(usize),
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Line(line) => write!(f, "line {line}"),
+            Self::Sample(index) => write!(f, "sample {index}"),
+            Self::Message(index) => write!(f, "message {index}"),
+        }
+    }
+}
+
+/// Everything that can go wrong in modelgap-core.
+///
+/// Messages start lowercase, have no trailing period and end with ` in <path>` when the file
+/// is known (see [`CoreError::with_path`]).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum CoreError {
+    /// Reading or writing a file failed.
+    #[error("i/o error: {error}{}", in_path(.path))]
+    Io {
+        /// The operating system's error.
+        error: std::io::Error,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A line of a text file is not valid UTF-8.
+    #[error("line {line} is not valid utf-8{}", in_path(.path))]
+    NotUtf8 {
+        /// The line, counted from 1.
+        line: usize,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// Time does not strictly increase from one sample to the next.
+    #[error(
+        "time is not strictly increasing at {at}: {t} s after {t_prev} s{}",
+        in_path(.path)
+    )]
+    NonIncreasingTime {
+        /// The sample that is not later than its predecessor.
+        at: Location,
+        /// The time of the previous sample (s).
+        t_prev: f64,
+        /// The time of the offending sample (s).
+        t: f64,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A CSV cell does not hold a number.
+    #[error("cannot read `{text}` as a number at line {line}, column `{column}`{}", in_path(.path))]
+    NotANumber {
+        /// The line, counted from 1.
+        line: usize,
+        /// The column name from the header.
+        column: String,
+        /// The cell's text, trimmed.
+        text: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A value is NaN or infinite.
+    #[error("value {value} is not finite at {at}, column `{column}`{}", in_path(.path))]
+    NonFinite {
+        /// Where the value sits.
+        at: Location,
+        /// The column or signal name (`t` for time).
+        column: String,
+        /// The offending value.
+        value: f64,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A CSV file has no header line.
+    #[error("no header line `t,<name>,…` found{}", in_path(.path))]
+    MissingHeader {
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// The CSV header does not start with the time column `t`.
+    #[error(
+        "missing column `t`: the header at line {line} must start with `t`, found `{found}`{}",
+        in_path(.path)
+    )]
+    MissingTimeColumn {
+        /// The header line, counted from 1.
+        line: usize,
+        /// The first header cell as found.
+        found: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A signal name was asked for that the recording does not have.
+    #[error("unknown signal `{name}`; available: {}", list(.available))]
+    UnknownSignal {
+        /// The name asked for.
+        name: String,
+        /// The names the recording has, in its order.
+        available: Vec<String>,
+    },
+
+    /// Two signals (columns, fields) share a name.
+    #[error("duplicate signal `{name}`{}{}", at_location(.at), in_path(.path))]
+    DuplicateSignal {
+        /// The repeated name.
+        name: String,
+        /// Where it repeats, when known.
+        at: Option<Location>,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A signal name is empty, reserved or cannot be stored in the target format.
+    #[error("invalid signal name `{name}`: {reason}{}{}", at_location(.at), in_path(.path))]
+    InvalidSignalName {
+        /// The name as given.
+        name: String,
+        /// Why it is rejected.
+        reason: &'static str,
+        /// Where it appears, when known.
+        at: Option<Location>,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A recording would have no samples.
+    #[error("recording has no samples{}", in_path(.path))]
+    EmptyRecording {
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A CSV row has a different number of cells than the header.
+    #[error(
+        "line {line} has {found} cells, expected {expected} (one per header column){}",
+        in_path(.path)
+    )]
+    RowLength {
+        /// The line, counted from 1.
+        line: usize,
+        /// The number of header columns.
+        expected: usize,
+        /// The number of cells on the line.
+        found: usize,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A signal's length differs from the number of time samples.
+    #[error("signal `{name}` has {found} values, expected {expected} (one per time sample)")]
+    LengthMismatch {
+        /// The signal name.
+        name: String,
+        /// The number of time samples.
+        expected: usize,
+        /// The number of values of the signal.
+        found: usize,
+    },
+
+    /// An argument is out of its domain (a NaN time, an empty interval).
+    #[error("invalid argument `{name}`: {reason}")]
+    InvalidArgument {
+        /// The argument's name.
+        name: &'static str,
+        /// What is wrong with it.
+        reason: String,
+    },
+
+    /// An MCAP file cannot be read: it is truncated or corrupt.
+    #[error("mcap data is truncated or corrupt: {reason}{}", in_path(.path))]
+    McapCorrupt {
+        /// The mcap crate's error text, with its causes.
+        reason: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// Writing an MCAP file failed.
+    #[error("cannot write mcap: {reason}{}", in_path(.path))]
+    McapWrite {
+        /// The mcap crate's error text, with its causes.
+        reason: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// An MCAP file has no messages on the requested topic.
+    #[error("no messages on topic `{topic}`; topics with messages: {}{}", list(.available), in_path(.path))]
+    TopicNotFound {
+        /// The requested topic.
+        topic: String,
+        /// The topics that do have messages, sorted.
+        available: Vec<String>,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A topic's messages are not JSON.
+    #[error("topic `{topic}` has message encoding `{encoding}`, expected `json`{}", in_path(.path))]
+    McapEncoding {
+        /// The topic.
+        topic: String,
+        /// The message encoding found.
+        encoding: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// An MCAP message is not a flat JSON object.
+    #[error("message {index} is not a flat json object of numbers: {reason}{}", in_path(.path))]
+    McapJson {
+        /// The message, counted from 0 in file order on the topic.
+        index: usize,
+        /// What the JSON parser said.
+        reason: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// An MCAP message lacks a field that the first message has.
+    #[error("message {index} lacks field `{field}` that the first message has{}", in_path(.path))]
+    McapMissingField {
+        /// The message, counted from 0 in file order on the topic.
+        index: usize,
+        /// The missing field.
+        field: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// An MCAP message has a field that the first message lacks.
+    #[error("message {index} has field `{field}` that the first message lacks{}", in_path(.path))]
+    McapUnexpectedField {
+        /// The message, counted from 0 in file order on the topic.
+        index: usize,
+        /// The extra field.
+        field: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A field of an MCAP message is not a finite number.
+    #[error("field `{field}` of message {index} is not a finite number: found `{found}`{}", in_path(.path))]
+    McapBadField {
+        /// The message, counted from 0 in file order on the topic.
+        index: usize,
+        /// The field.
+        field: String,
+        /// The JSON value found (shortened).
+        found: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A time cannot be stored as an MCAP `log_time` (negative, not finite, too large, or
+    /// two samples closer than the format's 1 ns resolution).
+    #[error("cannot store time {t} s as an mcap log time at {at}: {reason}{}", in_path(.path))]
+    McapTime {
+        /// Where the time sits.
+        at: Location,
+        /// The time (s).
+        t: f64,
+        /// Why it cannot be stored.
+        reason: &'static str,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A file extension that names no supported format.
+    #[error("unknown file extension `{extension}`: expected `csv` or `mcap`{}", in_path(.path))]
+    UnknownExtension {
+        /// The extension found (empty when the file has none).
+        extension: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+}
+
+impl CoreError {
+    /// Wraps an I/O error with the file it concerns.
+    pub fn io(error: std::io::Error, path: Option<&Path>) -> Self {
+        Self::Io {
+            error,
+            path: path.map(Path::to_path_buf),
+        }
+    }
+
+    /// Sets the file of a variant that names one, unless it already names one.
+    ///
+    /// Readers that work on in-memory data return errors without a path; the `*_path`
+    /// functions add the path with this.
+    #[must_use]
+    pub fn with_path(mut self, file: &Path) -> Self {
+        if let Some(slot) = self.path_slot()
+            && slot.is_none()
+        {
+            *slot = Some(file.to_path_buf());
+        }
+        self
+    }
+
+    /// The file this error concerns, when known.
+    pub fn path(&self) -> Option<&Path> {
+        match self {
+            Self::Io { path, .. }
+            | Self::NotUtf8 { path, .. }
+            | Self::NonIncreasingTime { path, .. }
+            | Self::NotANumber { path, .. }
+            | Self::NonFinite { path, .. }
+            | Self::MissingHeader { path }
+            | Self::MissingTimeColumn { path, .. }
+            | Self::DuplicateSignal { path, .. }
+            | Self::InvalidSignalName { path, .. }
+            | Self::EmptyRecording { path }
+            | Self::RowLength { path, .. }
+            | Self::McapCorrupt { path, .. }
+            | Self::McapWrite { path, .. }
+            | Self::TopicNotFound { path, .. }
+            | Self::McapEncoding { path, .. }
+            | Self::McapJson { path, .. }
+            | Self::McapMissingField { path, .. }
+            | Self::McapUnexpectedField { path, .. }
+            | Self::McapBadField { path, .. }
+            | Self::McapTime { path, .. }
+            | Self::UnknownExtension { path, .. } => path.as_deref(),
+            Self::UnknownSignal { .. }
+            | Self::LengthMismatch { .. }
+            | Self::InvalidArgument { .. } => None,
+        }
+    }
+
+    fn path_slot(&mut self) -> Option<&mut Option<PathBuf>> {
+        match self {
+            Self::Io { path, .. }
+            | Self::NotUtf8 { path, .. }
+            | Self::NonIncreasingTime { path, .. }
+            | Self::NotANumber { path, .. }
+            | Self::NonFinite { path, .. }
+            | Self::MissingHeader { path }
+            | Self::MissingTimeColumn { path, .. }
+            | Self::DuplicateSignal { path, .. }
+            | Self::InvalidSignalName { path, .. }
+            | Self::EmptyRecording { path }
+            | Self::RowLength { path, .. }
+            | Self::McapCorrupt { path, .. }
+            | Self::McapWrite { path, .. }
+            | Self::TopicNotFound { path, .. }
+            | Self::McapEncoding { path, .. }
+            | Self::McapJson { path, .. }
+            | Self::McapMissingField { path, .. }
+            | Self::McapUnexpectedField { path, .. }
+            | Self::McapBadField { path, .. }
+            | Self::McapTime { path, .. }
+            | Self::UnknownExtension { path, .. } => Some(path),
+            Self::UnknownSignal { .. }
+            | Self::LengthMismatch { .. }
+            | Self::InvalidArgument { .. } => None,
+        }
+    }
+}
+
+/// ` in <path>` when the path is known, nothing otherwise.
+fn in_path(path: &Option<PathBuf>) -> String {
+    match path {
+        Some(p) => format!(" in {}", p.display()),
+        None => String::new(),
+    }
+}
+
+/// ` at <location>` when the location is known, nothing otherwise.
+fn at_location(at: &Option<Location>) -> String {
+    match at {
+        Some(at) => format!(" at {at}"),
+        None => String::new(),
+    }
+}
+
+/// A comma-separated list, or `(none)`.
+fn list(items: &[String]) -> String {
+    if items.is_empty() {
+        "(none)".to_owned()
+    } else {
+        items.join(", ")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn non_increasing_time_message_names_line_times_and_path_last() {
+        let e = CoreError::NonIncreasingTime {
+            at: Location::Line(7),
+            t_prev: 0.6,
+            t: 0.5,
+            path: None,
+        }
+        .with_path(Path::new("data.csv"));
+        assert_eq!(
+            e.to_string(),
+            "time is not strictly increasing at line 7: 0.5 s after 0.6 s in data.csv"
+        );
+    }
+
+    #[test]
+    fn message_without_path_has_no_in_clause() {
+        let e = CoreError::EmptyRecording { path: None };
+        assert_eq!(e.to_string(), "recording has no samples");
+        assert!(e.path().is_none());
+    }
+
+    #[test]
+    fn with_path_keeps_an_existing_path() {
+        let e = CoreError::MissingHeader {
+            path: Some(PathBuf::from("first.csv")),
+        }
+        .with_path(Path::new("second.csv"));
+        assert_eq!(e.path(), Some(Path::new("first.csv")));
+    }
+
+    #[test]
+    fn with_path_leaves_pathless_variants_unchanged() {
+        let e = CoreError::UnknownSignal {
+            name: "x".into(),
+            available: vec!["i".into(), "omega".into()],
+        }
+        .with_path(Path::new("data.csv"));
+        assert_eq!(e.to_string(), "unknown signal `x`; available: i, omega");
+    }
+
+    #[test]
+    fn empty_list_reads_none() {
+        let e = CoreError::TopicNotFound {
+            topic: "/signals".into(),
+            available: vec![],
+            path: None,
+        };
+        assert_eq!(
+            e.to_string(),
+            "no messages on topic `/signals`; topics with messages: (none)"
+        );
+    }
+
+    #[test]
+    fn messages_are_lowercase_without_trailing_period() {
+        let errors = [
+            CoreError::NotANumber {
+                line: 4,
+                column: "i".into(),
+                text: "abc".into(),
+                path: Some("a.csv".into()),
+            },
+            CoreError::DuplicateSignal {
+                name: "i".into(),
+                at: Some(Location::Line(1)),
+                path: None,
+            },
+            CoreError::RowLength {
+                line: 3,
+                expected: 3,
+                found: 2,
+                path: None,
+            },
+            CoreError::io(std::io::Error::other("boom"), Some(Path::new("x.mcap"))),
+        ];
+        for e in errors {
+            let text = e.to_string();
+            let first = text.chars().next().unwrap_or('X');
+            assert!(first.is_lowercase(), "{text}");
+            assert!(!text.ends_with('.'), "{text}");
+        }
+    }
+}

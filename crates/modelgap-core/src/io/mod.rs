@@ -1,0 +1,138 @@
+//! Reading and writing recordings: CSV text and MCAP files.
+//!
+//! Each format has a pair of functions per direction: one that works on in-memory data
+//! (`read_signals`, `write_signals`) and one that opens the file and adds its path to errors
+//! (`read_signals_path`, `write_signals_path`). [`read_recording_path`] and
+//! [`write_recording_path`] pick the format from the file extension.
+
+pub mod csv;
+pub mod mcap;
+
+use std::path::Path;
+
+use crate::error::{CoreError, Result};
+use crate::recording::Recording;
+
+/// The file formats a recording can be stored in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// CSV text, extension `.csv` (see [`csv`]).
+    Csv,
+    /// MCAP, extension `.mcap` (see [`mod@mcap`]).
+    Mcap,
+}
+
+impl Format {
+    /// The format named by a path's extension (case-insensitive).
+    ///
+    /// # Errors
+    ///
+    /// [`CoreError::UnknownExtension`] for any extension other than `csv` or `mcap`, or none.
+    pub fn from_path(path: &Path) -> Result<Self> {
+        let extension = path
+            .extension()
+            .map(|e| e.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        match extension.to_ascii_lowercase().as_str() {
+            "csv" => Ok(Self::Csv),
+            "mcap" => Ok(Self::Mcap),
+            _ => Err(CoreError::UnknownExtension {
+                extension,
+                path: Some(path.to_path_buf()),
+            }),
+        }
+    }
+}
+
+/// Reads a recording from a `.csv` file, or from the [`mcap::DEFAULT_SIGNAL_TOPIC`] topic of
+/// a `.mcap` file.
+///
+/// # Errors
+///
+/// [`CoreError::UnknownExtension`] for another extension; otherwise as
+/// [`csv::read_signals_path`] or [`mcap::read_signals_path`].
+///
+/// # Example
+///
+/// ```no_run
+/// # use std::path::Path;
+/// let rec = modelgap_core::io::read_recording_path(Path::new("run1.csv"))?;
+/// println!("{} samples of {:?}", rec.len(), rec.names());
+/// # Ok::<(), modelgap_core::CoreError>(())
+/// ```
+pub fn read_recording_path(path: &Path) -> Result<Recording> {
+    match Format::from_path(path)? {
+        Format::Csv => csv::read_signals_path(path),
+        Format::Mcap => mcap::read_signals_path(path, mcap::DEFAULT_SIGNAL_TOPIC),
+    }
+}
+
+/// Writes a recording to a `.csv` file, or to the [`mcap::DEFAULT_SIGNAL_TOPIC`] topic of a
+/// zstd-compressed `.mcap` file.
+///
+/// # Errors
+///
+/// [`CoreError::UnknownExtension`] for another extension (nothing is written); otherwise as
+/// [`csv::write_signals_path`] or [`mcap::write_signals_path`].
+pub fn write_recording_path(path: &Path, recording: &Recording) -> Result<()> {
+    match Format::from_path(path)? {
+        Format::Csv => csv::write_signals_path(recording, path),
+        Format::Mcap => mcap::write_signals_path(
+            recording,
+            path,
+            mcap::DEFAULT_SIGNAL_TOPIC,
+            mcap::McapCompression::default(),
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recording::Signal;
+
+    #[test]
+    fn format_follows_extension_case_insensitively() {
+        assert_eq!(
+            Format::from_path(Path::new("a/b.CSV")).unwrap(),
+            Format::Csv
+        );
+        assert_eq!(
+            Format::from_path(Path::new("b.mcap")).unwrap(),
+            Format::Mcap
+        );
+    }
+
+    #[test]
+    fn unknown_extension_is_named_in_the_error() {
+        let e = Format::from_path(Path::new("data.txt")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "unknown file extension `txt`: expected `csv` or `mcap` in data.txt"
+        );
+        let e = read_recording_path(Path::new("noext")).unwrap_err();
+        assert!(
+            matches!(e, CoreError::UnknownExtension { ref extension, .. } if extension.is_empty())
+        );
+    }
+
+    #[test]
+    fn dispatch_round_trips_both_formats() {
+        let dir = std::env::temp_dir().join(format!("modelgap-core-io-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let rec = Recording::new(
+            vec![0.0, 0.001, 0.002],
+            vec![Signal::new("i", vec![0.1, 0.2, 0.3])],
+        )
+        .unwrap();
+        for name in ["rec.csv", "rec.mcap"] {
+            let path = dir.join(name);
+            write_recording_path(&path, &rec).unwrap();
+            assert_eq!(read_recording_path(&path).unwrap(), rec, "{name}");
+        }
+        let bad = dir.join("rec.json");
+        assert!(write_recording_path(&bad, &rec).is_err());
+        assert!(!bad.exists());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

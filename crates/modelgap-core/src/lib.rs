@@ -1,0 +1,50 @@
+//! The domain-free core of modelgap: recordings, their CSV and MCAP files, and the
+//! statistics that hold a model's prediction against a measurement.
+//!
+//! A [`Recording`] is a set of named signals on one strictly increasing time axis, checked
+//! when it is built or read (finite values, one value per sample, unique names). The
+//! [`io`] module reads and writes recordings as CSV text or MCAP files (JSON messages that
+//! Foxglove plots as is). The [`residual`] module measures how far a prediction is from a
+//! measurement: error statistics, the measurement's noise floor, thresholds, the windows
+//! where the residual leaves its band, and derivative estimates for temporal signatures.
+//! Both simulators of modelgap (bond graphs, cloth) build on these.
+//!
+//! # Example
+//!
+//! ```
+//! use modelgap_core::io::csv;
+//! use modelgap_core::residual::{failure_windows, stats, Threshold};
+//!
+//! let text = "t,i\n0.0,0.0\n0.1,0.63\n0.2,0.86\n0.3,0.95\n0.4,0.98\n";
+//! let measured = csv::read_signals(text.as_bytes())?;
+//! let i = measured.values("i")?;
+//! let predicted: Vec<f64> = measured.t().iter().map(|t| 1.0 - (-t / 0.1_f64).exp()).collect();
+//!
+//! let s = stats(i, &predicted);
+//! let band = Threshold::FractionOfSteadyState { fraction: 0.02 }.band(i);
+//! let residual: Vec<f64> = i.iter().zip(&predicted).map(|(m, p)| m - p).collect();
+//! let windows = failure_windows(measured.t(), &residual, band, 0.0);
+//! assert!(s.rms < 0.01 && windows.is_empty());
+//! # Ok::<(), modelgap_core::CoreError>(())
+//! ```
+//!
+//! # Modules
+//!
+//! - [`recording`]: [`Recording`] and [`Signal`].
+//! - [`io`]: [`io::csv`] and [`io::mcap`] readers and writers, and
+//!   [`io::read_recording_path`] / [`io::write_recording_path`], which choose by extension.
+//! - [`residual`]: [`residual::stats`], [`residual::estimate_noise_sigma`],
+//!   [`residual::effective_sample_size`], [`residual::Threshold`],
+//!   [`residual::failure_windows`], [`residual::first_exceedance`],
+//!   [`residual::savgol_derivatives`].
+//! - [`math`]: the nalgebra aliases used across modelgap.
+//! - [`error`]: [`CoreError`] and [`Result`].
+
+pub mod error;
+pub mod io;
+pub mod math;
+pub mod recording;
+pub mod residual;
+
+pub use error::{CoreError, Location, Result};
+pub use recording::{Recording, Signal};

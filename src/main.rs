@@ -1,0 +1,2 @@
+//! The `modelgap` command-line tool.
+fn main() {}
