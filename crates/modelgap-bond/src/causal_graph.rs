@@ -31,19 +31,21 @@ pub struct OperatingPoint {
 }
 
 impl OperatingPoint {
-    /// The steady state under the model's default inputs: solved from the
-    /// linearisation when the model is LTI, else reached by simulating ten
-    /// slowest time constants from rest.
+    /// The steady state under the model's default inputs, by Newton's
+    /// method; if there is none, the state reached after ten slowest time
+    /// constants from rest.
     ///
     /// # Errors
     /// Causality, equation and simulation errors of the graph.
     pub fn steady(g: &BondGraph) -> Result<OperatingPoint> {
         let model = CompiledModel::new(g)?;
         let u = model.input_defaults.clone();
-        let ss = StateSpace::of_compiled(&model, None, Some(&u));
-        let x = match ss.steady_state(&u).filter(|_| model.is_lti) {
-            Some(x) => x,
-            None => {
+        let x = match model.steady_state(&u, None) {
+            Ok(x) => x,
+            Err(_) => {
+                // No unique steady state (or Newton failed): run from rest
+                // for ten slowest time constants and take where it is.
+                let ss = StateSpace::of_compiled(&model, None, Some(&u));
                 let tau = ss.modes().first().map_or(1.0, |m| m.time_constant);
                 let horizon = if tau.is_finite() {
                     (10.0 * tau).clamp(1e-3, 1e3)

@@ -91,6 +91,8 @@ pub fn assign_causality(g: &BondGraph) -> Result<Causality> {
     let mut a = Assigner {
         g,
         stroke: vec![None; g.bonds().len()],
+        origin: vec![None; g.bonds().len()],
+        decision: None,
         queue: VecDeque::new(),
     };
     let ids: Vec<ElementId> = g.element_ids().collect();
@@ -103,6 +105,7 @@ pub fn assign_causality(g: &BondGraph) -> Result<Causality> {
                 ElementKind::Se => g.other_end(bond, id),
                 _ => id,
             };
+            a.decision = Some((id, bond));
             a.set(bond, target, id)?;
             a.propagate()?;
         }
@@ -121,6 +124,7 @@ pub fn assign_causality(g: &BondGraph) -> Result<Causality> {
         };
         match a.stroke[bond.0 as usize] {
             None => {
+                a.decision = Some((id, bond));
                 a.set(bond, integral, id)?;
                 a.propagate()?;
             }
@@ -137,6 +141,7 @@ pub fn assign_causality(g: &BondGraph) -> Result<Causality> {
         let (bond, _) = g.ports(id)[0];
         if a.stroke[bond.0 as usize].is_none() {
             chosen_r.push(id);
+            a.decision = Some((id, bond));
             a.set(bond, g.other_end(bond, id), id)?;
             a.propagate()?;
         }
@@ -147,6 +152,7 @@ pub fn assign_causality(g: &BondGraph) -> Result<Causality> {
         if a.stroke[bond.0 as usize].is_none() {
             chosen_bonds.push(bond);
             let to = g.bond_at(bond).to;
+            a.decision = Some((to, bond));
             a.set(bond, to, to)?;
             a.propagate()?;
         }
@@ -167,6 +173,10 @@ pub fn assign_causality(g: &BondGraph) -> Result<Causality> {
 struct Assigner<'g> {
     g: &'g BondGraph,
     stroke: Vec<Option<ElementId>>,
+    /// Per bond, the decision (element and its bond) whose propagation set the stroke.
+    origin: Vec<Option<(ElementId, BondId)>>,
+    /// The decision being propagated.
+    decision: Option<(ElementId, BondId)>,
     queue: VecDeque<ElementId>,
 }
 
@@ -174,6 +184,14 @@ impl Assigner<'_> {
     fn name(&self, id: ElementId) -> String {
         let e = self.g.element(id);
         format!("{} '{}'", e.kind, e.name)
+    }
+
+    /// " (set by Se 'V1' through bond 1)": who fixed the stroke already on `bond`.
+    fn origin(&self, bond: BondId) -> String {
+        match self.origin[bond.0 as usize] {
+            Some((id, b)) => format!(" (set by {} through bond {b})", self.name(id)),
+            None => String::new(),
+        }
     }
 
     fn conflict(&self, bond: BondId, detail: String) -> BondError {
@@ -194,14 +212,16 @@ impl Assigner<'_> {
             Some(t) => Err(self.conflict(
                 bond,
                 format!(
-                    "{} demands that {} receive the effort, but it is already imposed on {}",
+                    "{} demands that {} receive the effort, but it is already imposed on {}{}",
                     self.name(by),
                     self.name(into),
-                    self.name(t)
+                    self.name(t),
+                    self.origin(bond)
                 ),
             )),
             None => {
                 self.stroke[bond.0 as usize] = Some(into);
+                self.origin[bond.0 as usize] = self.decision;
                 let b = self.g.bond_at(bond);
                 self.queue.push_back(b.from);
                 self.queue.push_back(b.to);
@@ -311,9 +331,10 @@ impl Assigner<'_> {
                     return Err(self.conflict(
                         b,
                         format!(
-                            "{} must impose its {} but the rest of the graph imposes it on the source",
+                            "{} must impose its {} but the rest of the graph imposes it on the source{}",
                             self.name(id),
-                            if kind == ElementKind::Se { "effort" } else { "flow" }
+                            if kind == ElementKind::Se { "effort" } else { "flow" },
+                            self.origin(b)
                         ),
                     ));
                 }

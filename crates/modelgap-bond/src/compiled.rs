@@ -206,6 +206,58 @@ impl CompiledModel {
             .collect()
     }
 
+    /// The steady state `f(x, u) = 0` for constant inputs `u`, by Newton's
+    /// method with a finite-difference Jacobian from `guess` (zero if `None`).
+    ///
+    /// # Errors
+    /// [`BondError::BadOptions`] when Newton does not converge in 50
+    /// iterations or the Jacobian is singular (a model with a free
+    /// integrator, e.g. an unloaded mass, has no unique steady state).
+    pub fn steady_state(&self, u: &[f64], guess: Option<&[f64]>) -> Result<Vec<f64>> {
+        let n = self.n_states;
+        let mut x: Vec<f64> = guess.map_or_else(|| vec![0.0; n], <[f64]>::to_vec);
+        let mut scratch = self.scratch();
+        let mut f = vec![0.0; n];
+        let mut f2 = vec![0.0; n];
+        let mut jac = nalgebra::DMatrix::zeros(n, n);
+        for _ in 0..50 {
+            self.eval(0.0, &x, u, &mut scratch);
+            self.read_derivatives(&scratch, &mut f);
+            let scale: f64 = x.iter().fold(1e-12_f64, |m, v| m.max(v.abs()));
+            for j in 0..n {
+                let h = 1e-7 * x[j].abs().max(1e-6 * scale).max(1e-4);
+                let keep = x[j];
+                x[j] = keep + h;
+                self.eval(0.0, &x, u, &mut scratch);
+                self.read_derivatives(&scratch, &mut f2);
+                x[j] = keep;
+                for i in 0..n {
+                    jac[(i, j)] = (f2[i] - f[i]) / h;
+                }
+            }
+            let rhs = nalgebra::DVector::from_iterator(n, f.iter().map(|v| -v));
+            let dx = jac.clone().lu().solve(&rhs).ok_or_else(|| {
+                BondError::BadOptions(
+                    "no unique steady state: the Jacobian is singular".to_string(),
+                )
+            })?;
+            let mut step = 0.0_f64;
+            for (xi, d) in x.iter_mut().zip(dx.iter()) {
+                *xi += d;
+                step = step.max(d.abs() / xi.abs().max(1e-9 * scale.max(1.0)));
+            }
+            if x.iter().any(|v| !v.is_finite()) {
+                break;
+            }
+            if step < 1e-12 {
+                return Ok(x);
+            }
+        }
+        Err(BondError::BadOptions(
+            "steady state: Newton's method did not converge".to_string(),
+        ))
+    }
+
     /// Slot of input `j` in the scratch buffer (for drivers that write inputs in place).
     pub fn input_slot(&self, j: usize) -> usize {
         1 + self.n_states + j

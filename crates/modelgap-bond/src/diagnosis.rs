@@ -7,7 +7,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
 use modelgap_core::Recording;
-use modelgap_core::residual::{Threshold, first_exceedance, savgol_derivatives, steady_state};
+use modelgap_core::residual::{Threshold, first_exceedance, steady_state};
 
 use crate::causal_graph::CausalGraph;
 use crate::causality::assign_causality;
@@ -30,7 +30,8 @@ pub struct DiagnosisOptions {
     /// Consecutive samples out of the band that make a detection. Default 3.
     pub persistence: usize,
     /// Local time constant (s) under which a storage element's integration
-    /// counts as fast and its signatures are discarded. Default: 10 sample periods.
+    /// counts as fast and its signatures are discarded. Default: 2 sample periods
+    /// (an integration faster than that is over before the next sample).
     pub fast_time_constant: Option<f64>,
     /// Start the parallel model at its steady state under the recording's
     /// first input values (instead of at rest). Default false.
@@ -246,8 +247,7 @@ pub fn diagnose(g: &BondGraph, rec: &Recording, opts: &DiagnosisOptions) -> Resu
             .zip(&model.input_defaults)
             .map(|(n, d)| rec.signal(n).map_or(*d, |s| s.values[0]))
             .collect();
-        let ss = StateSpace::of_compiled(&model, None, Some(&u0));
-        sim.initial_state = ss.steady_state(&u0);
+        sim.initial_state = model.steady_state(&u0, None).ok();
     }
     let nominal = simulate(g, &inputs, rec.t(), &sim)?;
     let t = rec.t();
@@ -299,7 +299,7 @@ pub fn diagnose(g: &BondGraph, rec: &Recording, opts: &DiagnosisOptions) -> Resu
         .filter_map(|r| r.detected_at)
         .min_by(f64::total_cmp);
     // Fast states: local time constant −1/A_ii below the threshold.
-    let tau_fast = opts.fast_time_constant.unwrap_or(10.0 * dt);
+    let tau_fast = opts.fast_time_constant.unwrap_or(2.0 * dt);
     let ss = StateSpace::linearise(g, None, None)?;
     let mut fast: BTreeSet<Var> = BTreeSet::new();
     let mut fast_states = Vec::new();
@@ -325,11 +325,29 @@ pub fn diagnose(g: &BondGraph, rec: &Recording, opts: &DiagnosisOptions) -> Resu
     let Some(t_det) = detected_at else {
         return Ok(diag);
     };
-    let k_det = t.partition_point(|&x| x < t_det);
+    // Quiet level of each residual: what it shows before the fault (solver
+    // tolerance, measurement noise), at least a thousandth of its band.
+    let k_det = t.partition_point(|&x| x < t_det).min(t.len() - 1);
+    let quiet: Vec<f64> = diag
+        .residuals
+        .iter()
+        .map(|r| {
+            let pre = &r.residual[..(k_det / 2).max(1)];
+            (4.0 * modelgap_core::residual::rms(pre)).max(1e-3 * r.band)
+        })
+        .collect();
+    // The fault's onset: the last quiet sample before the first detection.
+    let k0 = diag
+        .residuals
+        .iter()
+        .zip(&quiet)
+        .find(|(r, _)| r.detected_at == Some(t_det))
+        .map_or(k_det, |(r, q)| onset(&r.residual, k_det, *q));
     diag.observed = diag
         .residuals
         .iter()
-        .map(|r| observe(t, r, k_det, opts.persistence))
+        .zip(&quiet)
+        .map(|(r, q)| observe(r, k0, *q))
         .collect();
     // Progressive: a stage each time another measurement leaves its band.
     let mut times: Vec<f64> = diag
@@ -375,6 +393,51 @@ pub fn diagnose(g: &BondGraph, rec: &Recording, opts: &DiagnosisOptions) -> Resu
             after_signatures: after,
         });
     }
+    // Residual behaviour: a permanent residual needs a candidate that moves
+    // that output's steady state the same way; transitory candidates (L, J,
+    // filter elements) cannot explain it.
+    if let Some(last) = diag.stages.last().cloned() {
+        let permanent: Vec<(usize, Qual)> = diag
+            .residuals
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| r.behaviour == Behaviour::Permanent)
+            .map(|(j, r)| {
+                let tail = &r.residual[r.residual.len() - (r.residual.len() / 20).max(1)..];
+                (j, Qual::of(tail.iter().sum::<f64>(), 0.0))
+            })
+            .collect();
+        if !permanent.is_empty() {
+            let u_end: Vec<f64> = input_names
+                .iter()
+                .zip(&diag.nominal.inputs)
+                .map(|(_, v)| *v.last().unwrap_or(&0.0))
+                .collect();
+            let x_end: Vec<f64> = diag
+                .nominal
+                .states
+                .iter()
+                .map(|v| *v.last().unwrap_or(&0.0))
+                .collect();
+            let names: Vec<String> = diag.residuals.iter().map(|r| r.output.clone()).collect();
+            let mut kept = BTreeSet::new();
+            for h in &last.after_signatures {
+                let ok = match steady_effect(g, h, &u_end, &x_end, &names) {
+                    Some(effect) => permanent.iter().all(|&(j, s)| effect[j] == s),
+                    None => true,
+                };
+                if ok {
+                    kept.insert(h.clone());
+                }
+            }
+            diag.stages.push(Stage {
+                at: *t.last().unwrap_or(&0.0),
+                deviating: last.deviating.clone(),
+                from_trees: last.after_signatures.clone(),
+                after_signatures: kept,
+            });
+        }
+    }
     if let Some(last) = diag.stages.last() {
         diag.hypotheses = if last.after_signatures.is_empty() && !last.from_trees.is_empty() {
             diag.warnings.push(
@@ -388,42 +451,108 @@ pub fn diagnose(g: &BondGraph, rec: &Recording, opts: &DiagnosisOptions) -> Resu
     Ok(diag)
 }
 
-/// Reads magnitude, jump and slope of a residual at the detection index.
-fn observe(t: &[f64], r: &OutputResidual, k_det: usize, persistence: usize) -> ObservedSignature {
-    let n = t.len();
-    let band = r.band;
-    // Magnitude once the detection is confirmed.
-    let k_conf = (k_det + persistence.max(1) - 1).min(n - 1);
-    let out_now = r.detected_at.is_some_and(|d| d <= t[k_conf]);
-    let magnitude = if out_now {
-        Qual::of(r.residual[k_conf], band)
+/// The last sample at or before `k` where the residual is still quiet.
+fn onset(r: &[f64], k: usize, quiet: f64) -> usize {
+    let mut k0 = k;
+    while k0 > 0 && r[k0].abs() > quiet {
+        k0 -= 1;
+    }
+    k0
+}
+
+/// How a small deviation of `h` moves the steady state of each output in
+/// `names` (for the inputs `u`), or `None` when no steady state is found.
+fn steady_effect(
+    g: &BondGraph,
+    h: &Hypothesis,
+    u: &[f64],
+    guess: &[f64],
+    names: &[String],
+) -> Option<Vec<Qual>> {
+    let outputs_at = |g: &BondGraph, u: &[f64]| -> Option<Vec<f64>> {
+        let model = crate::compiled::CompiledModel::new(g).ok()?;
+        let x = model.steady_state(u, Some(guess)).ok()?;
+        let mut scratch = model.scratch();
+        let mut y = vec![0.0; model.n_outputs()];
+        model.eval(0.0, &x, u, &mut scratch);
+        model.read_outputs(&scratch, &mut y);
+        Some(
+            names
+                .iter()
+                .map(|n| {
+                    model
+                        .output_names
+                        .iter()
+                        .position(|m| m == n)
+                        .map_or(0.0, |i| y[i])
+                })
+                .collect(),
+        )
+    };
+    let y0 = outputs_at(g, u)?;
+    let factor = 1.0 + 0.1 * f64::from(h.deviation.as_i8());
+    let y1 = if let Ok(v) = g.param(&h.param) {
+        let mut g2 = g.clone();
+        g2.set_param(&h.param, v * factor).ok()?;
+        outputs_at(&g2, u)?
     } else {
-        Qual::Zero
+        let j = g.inputs().keys().position(|k| k == &h.param)?;
+        let mut u2 = u.to_vec();
+        u2[j] *= factor;
+        outputs_at(g, &u2)?
     };
-    // A jump: within two samples before detection the residual was inside a quarter band.
-    let jump = out_now && {
-        let k0 = k_det.saturating_sub(2);
-        r.residual[k0..=k_det.min(n - 1)]
-            .iter()
-            .any(|x| x.abs() < 0.25 * band)
-            && r.residual[k_det.min(n - 1)].abs() > band
-            && r.detected_at
-                .is_some_and(|d| (d - t[k_det.min(n - 1)]).abs() < 1e-12)
+    Some(
+        y0.iter()
+            .zip(&y1)
+            .map(|(a, b)| Qual::of(b - a, 1e-6 * a.abs().max(1e-12)))
+            .collect(),
+    )
+}
+
+/// Reads the onset signature of a residual after the fault's onset `k0`
+/// (the last quiet sample). A change of a derivative starts from zero, so
+/// the first sample out of the quiet level has the sign of the first
+/// changed derivative, and the growth to the next sample gives its order
+/// (`r ∝ (t − t0)^k` grows by `((n + 1)/n)^k` from the n-th sample after
+/// onset to the next). A jump
+/// leaves its band in the very first sample and does not grow.
+fn observe(r: &OutputResidual, k0: usize, quiet: f64) -> ObservedSignature {
+    let n = r.residual.len();
+    let none = ObservedSignature {
+        output: r.output.clone(),
+        magnitude: Qual::Zero,
+        jump: false,
+        slope: Qual::Zero,
+        order: None,
     };
-    // Slope just after detection from a local quadratic fit over a short window.
-    let lo = k_det.min(n - 1);
-    let hi = (k_det + 8).min(n);
-    let slope = if hi - lo >= 4 {
-        let (_, d1, _) = savgol_derivatives(&t[lo..hi], &r.residual[lo..hi], hi - lo, 2);
-        let window = t[hi - 1] - t[lo];
-        Qual::of(d1[0], 0.25 * band / window.max(1e-12))
+    if r.detected_at.is_none() {
+        return none;
+    }
+    let Some(k1) = (k0 + 1..n).find(|&k| r.residual[k].abs() > quiet) else {
+        return none;
+    };
+    let a = r.residual[k1];
+    let b = r.residual[(k1 + 1).min(n - 1)];
+    let growth = if a.signum() == b.signum() {
+        b.abs() / a.abs()
     } else {
-        Qual::Zero
+        0.0
     };
+    let jump = k1 == k0 + 1 && a.abs() > r.band && growth < 1.41;
+    // r ∝ (t − t0)^k: from sample n to n + 1 after onset it grows by ((n + 1)/n)^k.
+    let since = (k1 - k0) as f64;
+    let per_order = ((since + 1.0) / since).ln();
+    let order = if jump {
+        0
+    } else {
+        ((growth.max(1.0).ln() / per_order).round() as usize).max(1)
+    };
+    let slope = Qual::of(b - a, 0.0);
     ObservedSignature {
         output: r.output.clone(),
-        magnitude,
+        magnitude: Qual::of(a, 0.0),
         jump,
         slope,
+        order: Some(order),
     }
 }

@@ -259,7 +259,8 @@ fn junction_equations(g: &BondGraph, c: &Causality, id: ElementId, out: &mut Vec
         .find(|p| p.0 == s)
         .map(|p| p.1.sign())
         .unwrap_or(1.0);
-    let (sum_var, eq_var): (fn(u32) -> Var, fn(u32) -> Var) = if zero {
+    type VarOf = fn(u32) -> Var;
+    let (sum_var, eq_var): (VarOf, VarOf) = if zero {
         (Var::F, Var::E)
     } else {
         (Var::E, Var::F)
@@ -499,12 +500,25 @@ fn sort(g: &BondGraph, eqs: &[CausalEquation], states: &[State]) -> Result<Vec<u
         }
     }
     // Report the loop: the bonds whose variables wait on each other.
-    let waiting: Vec<&CausalEquation> = eqs
+    let all_waiting: Vec<&CausalEquation> = eqs
         .iter()
         .enumerate()
         .filter(|(i, _)| !done[*i])
         .map(|(_, e)| e)
         .collect();
+    // Equations that merely wait on the loop (no other waiting equation needs
+    // them) are not part of it: drop them until only the loop is left.
+    let mut waiting = all_waiting.clone();
+    while let Some(i) = waiting.iter().position(|e| {
+        !waiting
+            .iter()
+            .any(|other| other.rhs.vars().contains(&e.target))
+    }) {
+        waiting.remove(i);
+    }
+    if waiting.is_empty() {
+        waiting = all_waiting;
+    }
     let mut bonds = BTreeSet::new();
     let mut elements = BTreeSet::new();
     for e in &waiting {

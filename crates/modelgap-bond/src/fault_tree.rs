@@ -142,8 +142,9 @@ pub fn fault_tree(cg: &CausalGraph, output: &str, qual: Qual) -> Result<FaultTre
     }
     let mut expanded: BTreeSet<(Var, Qual)> = BTreeSet::new();
     // Depth-first with an explicit stack: (var, qual, parent, path assignments).
-    let mut stack: Vec<(Var, Qual, Option<usize>, BTreeMap<Var, Qual>)> =
-        vec![(var, qual, None, BTreeMap::new())];
+    // (variable, value, parent node, the assignments along the path to it)
+    type Pending = (Var, Qual, Option<usize>, BTreeMap<Var, Qual>);
+    let mut stack: Vec<Pending> = vec![(var, qual, None, BTreeMap::new())];
     while let Some((v, q, parent, mut path)) = stack.pop() {
         let conflict = path.get(&v).is_some_and(|&p| p != q);
         let repeated = !conflict && !expanded.insert((v, q));

@@ -1,5 +1,6 @@
 //! Bond graphs: modelling, causality, equations, simulation and fault diagnosis.
 
+pub mod arr;
 pub mod causality;
 pub mod compiled;
 pub mod element;
@@ -13,6 +14,7 @@ pub mod notation;
 pub mod ode;
 pub mod simulate;
 pub mod state_space;
+pub mod table7;
 
 pub use causality::{Causality, assign_causality};
 pub use compiled::CompiledModel;

@@ -90,7 +90,10 @@ impl Drive {
                 if let Some(i) = values.iter().position(|v| !v.is_finite()) {
                     return bad(format!("sample {i} is not finite ({})", values[i]));
                 }
-                if let Some(i) = t.windows(2).position(|w| !(w[1] > w[0])) {
+                if let Some(i) = t
+                    .windows(2)
+                    .position(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+                {
                     return bad(format!(
                         "time is not strictly increasing at sample {}",
                         i + 1
@@ -160,8 +163,11 @@ impl Drive {
                 high,
                 low,
             } => {
-                let phase = (t * frequency_hz).fract();
-                // A small tolerance puts a query at an edge time on the new side.
+                // A small tolerance puts a query at an edge time on the new
+                // side, also when rounding leaves `t f` just below a whole
+                // number of periods (the rising edge).
+                let x = t * frequency_hz;
+                let phase = x - (x + 1e-12).floor();
                 if phase + 1e-12 < *duty { *high } else { *low }
             }
         }
@@ -411,7 +417,14 @@ pub fn simulate(g: &BondGraph, inputs: &Inputs, t_out: &[f64], opts: &SimOptions
     let mut run: Option<Run> = None;
     let mut seg_opts = opts.clone();
     seg_opts.changes.clear();
-    let mut bounds: Vec<f64> = changes.iter().map(|c| c.at).collect();
+    if let Some(c) = changes.iter().find(|c| !c.at.is_finite()) {
+        return Err(BondError::BadOptions(format!(
+            "the change of '{}' must happen at a finite time, found {}",
+            c.name, c.at
+        )));
+    }
+    // A change at or before the first output time applies from the start.
+    let mut bounds: Vec<f64> = changes.iter().map(|c| c.at.max(t_start)).collect();
     bounds.push(f64::INFINITY);
     let mut ci = 0;
     for &end in &bounds {
@@ -515,7 +528,10 @@ fn simulate_from(
             "output time {i} is not finite"
         )));
     }
-    if let Some(i) = t_out.windows(2).position(|w| !(w[1] > w[0])) {
+    if let Some(i) = t_out
+        .windows(2)
+        .position(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+    {
         return Err(BondError::BadOptions(format!(
             "output times must be strictly increasing (at index {})",
             i + 1
@@ -550,9 +566,11 @@ fn simulate_from(
             )));
         }
         Some(x) if x.iter().any(|v| !v.is_finite()) => {
-            return Err(BondError::BadOptions(
-                "initial state must be finite".to_string(),
-            ));
+            let i = x.iter().position(|v| !v.is_finite()).unwrap_or(0);
+            return Err(BondError::BadOptions(format!(
+                "initial state {} must be finite, found {}",
+                model.state_names[i], x[i]
+            )));
         }
         Some(x) => x.clone(),
         None => vec![0.0; n],
@@ -626,11 +644,11 @@ fn simulate_from(
         }
         model.eval(t, x, &u, &mut scratch);
         model.read_outputs(&scratch, &mut y);
-        for i in 0..n {
-            run.states[i].push(x[i]);
+        for (column, &v) in run.states.iter_mut().zip(x) {
+            column.push(v);
         }
-        for j in 0..m {
-            run.inputs[j].push(u[j]);
+        for (column, &v) in run.inputs.iter_mut().zip(&u) {
+            column.push(v);
         }
         for (i, &v) in y.iter().enumerate() {
             if !v.is_finite() {
@@ -761,9 +779,17 @@ fn exact_lti(
     let mut grid: Vec<f64> = t_out.to_vec();
     let mut zoh = vec![false; m];
     for (j, d) in drives.iter().enumerate() {
-        if let Drive::Sampled { t, hold, .. } = d {
-            grid.extend(t.iter().copied().filter(|&x| x > t0 && x < t_end));
-            zoh[j] = *hold == Hold::Zero;
+        match d {
+            Drive::Sampled { t, hold, .. } => {
+                grid.extend(t.iter().copied().filter(|&x| x > t0 && x < t_end));
+                zoh[j] = *hold == Hold::Zero;
+            }
+            // A PWM is constant between its edges: put every edge on the grid.
+            Drive::Pwm { .. } => {
+                d.breakpoints(t0, t_end, &mut grid);
+                zoh[j] = true;
+            }
+            Drive::Constant(_) => {}
         }
     }
     if t0 < t_out[0] {

@@ -28,6 +28,8 @@ pub struct StateSpace {
     pub x0: Vec<f64>,
     /// The operating point's inputs.
     pub u0: Vec<f64>,
+    /// The state derivative at the operating point, `f(x0, u0)`.
+    pub f0: Vec<f64>,
 }
 
 /// An eigenvalue with its time constant.
@@ -85,6 +87,8 @@ impl StateSpace {
             DMatrix::zeros(p, m),
         );
         let (mut dx2, mut y2) = (vec![0.0; n], vec![0.0; p]);
+        eval(&x0, &u0, &mut dx, &mut y);
+        let f0 = dx.clone();
         let mut x = x0.clone();
         for j in 0..n {
             // Central difference; exact up to rounding for affine models.
@@ -126,6 +130,7 @@ impl StateSpace {
             d,
             x0,
             u0,
+            f0,
         }
     }
 
@@ -152,15 +157,16 @@ impl StateSpace {
         modes
     }
 
-    /// The steady state `x = −A⁻¹ B u` for constant inputs `u`, if A is invertible.
+    /// The steady state of the linearisation for inputs `u`:
+    /// `x = x0 − A⁻¹ (f0 + B (u − u0))`, one Newton step from the operating
+    /// point (exact for linear models; see [`CompiledModel::steady_state`]
+    /// for nonlinear ones). `None` if A is singular.
     pub fn steady_state(&self, u: &[f64]) -> Option<Vec<f64>> {
-        let u = nalgebra::DVector::from_column_slice(u);
-        let rhs = -(&self.b * u);
-        self.a
-            .clone()
-            .lu()
-            .solve(&rhs)
-            .map(|x| x.iter().copied().collect())
+        let du =
+            nalgebra::DVector::from_iterator(u.len(), u.iter().zip(&self.u0).map(|(a, b)| a - b));
+        let rhs = -(nalgebra::DVector::from_column_slice(&self.f0) + &self.b * du);
+        let dx = self.a.clone().lu().solve(&rhs)?;
+        Some(self.x0.iter().zip(dx.iter()).map(|(a, b)| a + b).collect())
     }
 
     /// The outputs `y = C x + D u`.

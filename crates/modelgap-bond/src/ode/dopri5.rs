@@ -9,10 +9,9 @@
 //! 135–150; stiffness detection from Hairer & Wanner, *Solving Ordinary
 //! Differential Equations II*, 2nd ed., Sect. IV.2.
 
-use super::{
-    OdeError, OdeOptions, OdeStats, OdeSystem, Segment, check_budget, check_step_size,
-    first_nonfinite, initial_step,
-};
+use super::control::{check_budget, check_step_size, first_nonfinite, initial_step};
+use super::driver::Segment;
+use super::{OdeError, OdeOptions, OdeStats, OdeSystem};
 
 const C2: f64 = 0.2;
 const C3: f64 = 0.3;
@@ -64,6 +63,8 @@ const EXPO1: f64 = 0.2 - BETA * 0.75;
 const MAX_SHRINK: f64 = 5.0;
 /// Smallest `h / h_new`, i.e. largest increase ×10 (DOPRI5's `1/FAC2`).
 const MIN_SHRINK: f64 = 0.1;
+/// `ln(1e-4)`: DOPRI5 remembers `max(err, 1e-4)` for the PI controller.
+const LN_ERR_FLOOR: f64 = -9.210_340_371_976_182;
 /// `h·|λ|` above which a step counts as stiff: the explicit stability
 /// region of DOPRI5 reaches about −3.3 on the real axis.
 const STIFF_H_LAMBDA: f64 = 3.25;
@@ -84,6 +85,8 @@ pub(super) struct Dopri5 {
     t_old: f64,
     /// Length of the last accepted step, s.
     h_done: f64,
+    /// `1 / h_done`, 1/s (set with the dense-output coefficients).
+    inv_h_done: f64,
     /// State at `t_old`.
     x_old: Vec<f64>,
     /// f at the current point (FSAL: the last stage of the previous step).
@@ -127,6 +130,7 @@ impl Dopri5 {
             h,
             t_old: t,
             h_done: 0.0,
+            inv_h_done: 0.0,
             x_old: x.to_vec(),
             k1: vec![0.0; n],
             k1_old: vec![0.0; n],
@@ -199,9 +203,7 @@ impl Dopri5 {
         let n = self.x.len();
         let Self {
             x,
-            x_old,
             k1,
-            k1_old,
             k2,
             k3,
             k4,
@@ -214,8 +216,8 @@ impl Dopri5 {
             ..
         } = self;
         let (x, k1, k2, k3, k4, k5, k6, k7, y, ysti, x_new) = (
-            &mut x[..n],
-            &mut k1[..n],
+            &x[..n],
+            &k1[..n],
             &mut k2[..n],
             &mut k3[..n],
             &mut k4[..n],
@@ -228,7 +230,7 @@ impl Dopri5 {
         );
         let t = self.t;
         let mut nonfinite = None;
-        loop {
+        let stiff = loop {
             check_budget(stats, opts, t)?;
             let h_proposed = self.h.min(opts.max_step);
             check_step_size(t, h_proposed, nonfinite)?;
@@ -272,21 +274,24 @@ impl Dopri5 {
             }
             let err = (sum / n as f64).sqrt();
 
-            // Step-size proposal (DOPRI5 with Lund stabilization). A NaN error
-            // gives a NaN `fac11`, and `f64::min` then picks the largest
-            // decrease: a non-finite trial is rejected and the step shrunk.
-            let fac11 = err.powf(EXPO1);
-            let fac = (fac11 / self.facold_beta / SAFE)
-                .min(MAX_SHRINK)
-                .max(MIN_SHRINK);
-            if !(err <= 1.0) {
-                if !err.is_finite() {
+            // Step-size control as DOPRI5: `fac11` drives a rejection, the PI
+            // ratio with Lund stabilization an acceptance.
+            // err^a as exp(a ln err): one ln and two exp per step instead of
+            // two pow calls (err = 0 gives ln = −∞ and exp(−∞) = 0).
+            let ln_err = err.ln();
+            let fac11 = (EXPO1 * ln_err).exp();
+            if !err.is_finite() || err > 1.0 {
+                if err.is_finite() {
+                    self.h = h / MAX_SHRINK.min(fac11 / SAFE);
+                } else {
+                    // A non-finite trial: shrink as much as allowed, and
+                    // remember which state it was in case the step underflows.
                     nonfinite = first_nonfinite(x_new)
                         .or_else(|| first_nonfinite(k7))
                         .or_else(|| first_nonfinite(k6))
                         .or(Some(0));
+                    self.h = h / MAX_SHRINK;
                 }
-                self.h = h / MAX_SHRINK.min(fac11 / SAFE);
                 self.reject = true;
                 stats.rejected += 1;
                 continue;
@@ -301,7 +306,8 @@ impl Dopri5 {
                 });
             }
             stats.steps += 1;
-            self.facold_beta = err.max(1e-4).powf(BETA);
+            let fac = (fac11 / self.facold_beta / SAFE).clamp(MIN_SHRINK, MAX_SHRINK);
+            self.facold_beta = (BETA * ln_err.max(LN_ERR_FLOOR)).exp();
             let mut h_new = (h / fac).min(opts.max_step);
             if self.reject {
                 h_new = h_new.min(h);
@@ -334,18 +340,20 @@ impl Dopri5 {
                 self.n_stiff >= STIFF_STEPS
             };
 
-            // Keep what the dense output needs, then advance (FSAL: k7 is
-            // the first stage of the next step).
-            x_old.copy_from_slice(x);
-            x.copy_from_slice(x_new);
-            k1_old.copy_from_slice(k1);
-            k1.copy_from_slice(k7);
             self.t_old = t;
             self.t = t_new;
             self.h_done = h;
             self.dense_ready = false;
-            return Ok(stiff);
-        }
+            break stiff;
+        };
+        // Keep what the dense output needs, then advance by exchanging
+        // buffers rather than copying them: x_old ← x ← x_new, and
+        // k1_old ← k1 ← k7 (FSAL: k7 is the first stage of the next step).
+        std::mem::swap(&mut self.x_old, &mut self.x);
+        std::mem::swap(&mut self.x, &mut self.x_new);
+        std::mem::swap(&mut self.k1_old, &mut self.k1);
+        std::mem::swap(&mut self.k1, &mut self.k7);
+        Ok(stiff)
     }
 
     /// Computes the dense-output coefficients of the last accepted step
@@ -377,22 +385,25 @@ impl Dopri5 {
                     + D6 * self.k6[i]
                     + D7 * k7[i]);
         }
+        self.inv_h_done = 1.0 / h;
         self.dense_ready = true;
     }
 
     /// The dense output at `t` inside the last accepted step into `out`.
     /// Call [`prepare_dense`](Self::prepare_dense) first.
+    #[inline]
     pub(super) fn interpolate(&self, t: f64, out: &mut [f64]) {
         debug_assert!(self.dense_ready, "prepare_dense before interpolate");
         let n = self.x.len();
-        let s = (t - self.t_old) / self.h_done;
+        let s = (t - self.t_old) * self.inv_h_done;
         let s1 = 1.0 - s;
         let (c0, rest) = self.cont.split_at(n);
         let (c1, rest) = rest.split_at(n);
         let (c2, rest) = rest.split_at(n);
         let (c3, c4) = rest.split_at(n);
-        for (i, o) in out.iter_mut().enumerate().take(n) {
-            *o = c0[i] + s * (c1[i] + s1 * (c2[i] + s * (c3[i] + s1 * c4[i])));
+        let rows = c0.iter().zip(c1).zip(c2).zip(c3).zip(c4);
+        for (o, ((((a0, a1), a2), a3), a4)) in out.iter_mut().zip(rows) {
+            *o = a0 + s * (a1 + s1 * (a2 + s * (a3 + s1 * a4)));
         }
     }
 }

@@ -3,7 +3,8 @@
 //! nalgebra's `LU::new` takes its matrix by value and allocates a fresh
 //! permutation on every call, and offers no way to factor into existing
 //! storage. The Rosenbrock step factors a small dense matrix once per attempt,
-//! so this module does the same Gaussian elimination with partial pivoting in a `DMatrix` and a pivot vector that live for the whole solve.
+//! so this module does the same Gaussian elimination with partial pivoting
+//! in a `DMatrix` and a pivot vector that live for the whole solve.
 
 use nalgebra::DMatrix;
 

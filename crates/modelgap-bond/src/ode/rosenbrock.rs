@@ -8,19 +8,22 @@
 //! Jacobian once ([`OdeSystem::jacobian`]) and factors `I/(γh) − J` (γ = 1/4)
 //! once per attempt; a rejected attempt reuses the Jacobian.
 //!
-//! Non-autonomous systems use the standard formulation (HW II, eq. IV.7.4'):
+//! Non-autonomous systems use the standard formulation (HW II, Sect. IV.7):
 //! each stage adds `γ_i h ∂f/∂t`, with `∂f/∂t` from one forward difference
 //! in time per step, `δ = sqrt(ε · max(1e-5, |t|))` (RODAS's choice), kept
 //! inside the current segment so the probe never crosses a breakpoint. For an
 //! autonomous system this costs one extra rhs call per step and adds zero.
+//!
+//! The dense output (`CONTRO` in RODAS) is of order 3 for non-stiff
+//! components; in the stiff limit it degrades (see the module docs of
+//! `ode`, and `prothero_robinson_dense_output_degrades_gracefully_in_the_stiff_limit`).
 
 use nalgebra::DMatrix;
 
+use super::control::{check_budget, check_step_size, first_nonfinite, initial_step};
+use super::driver::Segment;
 use super::lu::Lu;
-use super::{
-    OdeError, OdeOptions, OdeStats, OdeSystem, Segment, check_budget, check_step_size,
-    first_nonfinite, initial_step,
-};
+use super::{OdeError, OdeOptions, OdeStats, OdeSystem};
 
 /// Diagonal coefficient γ.
 const GAMMA: f64 = 0.25;
@@ -88,8 +91,8 @@ pub(super) struct Rosenbrock {
     pub h: f64,
     /// Start of the last accepted step, s.
     t_old: f64,
-    /// Length of the last accepted step, s.
-    h_done: f64,
+    /// `1 / h`, 1/s, of the last accepted step (for the dense output).
+    inv_h_done: f64,
     /// State at `t_old`.
     x_old: Vec<f64>,
     /// f at the step start.
@@ -128,7 +131,7 @@ impl Rosenbrock {
             x: x.to_vec(),
             h,
             t_old: t,
-            h_done: 0.0,
+            inv_h_done: 0.0,
             x_old: x.to_vec(),
             f0: vec![0.0; n],
             dfdt: vec![0.0; n],
@@ -235,7 +238,6 @@ impl Rosenbrock {
 
         let Self {
             x,
-            x_old,
             f0,
             dfdt,
             lu,
@@ -253,7 +255,7 @@ impl Rosenbrock {
             ..
         } = self;
         let (x, f0, dfdt, k1, k2, k3, k4, k5, k6, y, dy) = (
-            &mut x[..n],
+            &x[..n],
             &f0[..n],
             &dfdt[..n],
             &mut k1[..n],
@@ -382,15 +384,16 @@ impl Rosenbrock {
             }
             let err = (sum / n as f64).sqrt();
 
-            // A NaN error gives a NaN ratio, and `f64::min` then picks the
-            // largest decrease.
-            let mut fac = (err.powf(0.25) / SAFE).min(MAX_SHRINK).max(MIN_SHRINK);
-            if !(err <= 1.0) {
-                if !err.is_finite() {
+            if !err.is_finite() || err > 1.0 {
+                if err.is_finite() {
+                    self.h = h / (err.powf(0.25) / SAFE).clamp(MIN_SHRINK, MAX_SHRINK);
+                } else {
+                    // A non-finite trial: shrink as much as allowed, and
+                    // remember which state it was in case the step underflows.
                     nonfinite = first_nonfinite(k6).or(Some(0));
+                    self.h = h / MAX_SHRINK;
                 }
                 self.reject = true;
-                self.h = h / fac;
                 stats.rejected += 1;
                 continue;
             }
@@ -407,10 +410,10 @@ impl Rosenbrock {
                 });
             }
             stats.steps += 1;
+            let mut fac = (err.powf(0.25) / SAFE).clamp(MIN_SHRINK, MAX_SHRINK);
             if let Some((h_acc, err_acc)) = self.last_accept {
                 let fac_pred = ((h_acc / h) * (err * err / err_acc).powf(0.25) / SAFE)
-                    .min(MAX_SHRINK)
-                    .max(MIN_SHRINK);
+                    .clamp(MIN_SHRINK, MAX_SHRINK);
                 fac = fac.max(fac_pred);
             }
             self.last_accept = Some((h, err.max(1e-2)));
@@ -430,18 +433,21 @@ impl Rosenbrock {
                 cont2[i] = D21 * k1[i] + D22 * k2[i] + D23 * k3[i] + D24 * k4[i] + D25 * k5[i];
                 cont3[i] = D31 * k1[i] + D32 * k2[i] + D33 * k3[i] + D34 * k4[i] + D35 * k5[i];
             }
-            x_old.copy_from_slice(x);
-            x.copy_from_slice(y);
             self.t_old = t;
             self.t = t_new;
-            self.h_done = h;
-            return Ok(());
+            self.inv_h_done = 1.0 / h;
+            break;
         }
+        // x_old ← x ← y (the new state), by exchanging buffers.
+        std::mem::swap(&mut self.x_old, &mut self.x);
+        std::mem::swap(&mut self.x, &mut self.y);
+        Ok(())
     }
 
     /// The dense output at `t` inside the last accepted step into `out`.
+    #[inline]
     pub(super) fn interpolate(&self, t: f64, out: &mut [f64]) {
-        let s = (t - self.t_old) / self.h_done;
+        let s = (t - self.t_old) * self.inv_h_done;
         let s1 = 1.0 - s;
         let rows = self
             .x_old

@@ -1,0 +1,1 @@
+//! `modelgap bond bench`: timings of the bond-graph simulator (being wired).

@@ -1,0 +1,167 @@
+//! The `modelgap` command line: argument definitions (clap derive), dispatch, exit codes.
+//!
+//! Each subcommand sits in its own module and is a library call plus formatting:
+//! [`model`] loads the model every `bond` subcommand takes, [`format`] prints numbers and
+//! matrices, [`noise`] is the seeded Gaussian generator of `simulate --noise`.
+
+mod bench;
+mod causality;
+mod diagnose;
+mod equations;
+mod format;
+mod graph;
+mod model;
+mod noise;
+mod simulate;
+mod table7;
+
+use std::io::Write as _;
+
+use clap::{Parser, Subcommand};
+use modelgap::{BondError, CoreError};
+
+/// Hold physical models against measurements: bond graphs with fault diagnosis.
+#[derive(Debug, Parser)]
+#[command(name = "modelgap", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// The top-level commands.
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Bond graphs: equations, simulation, causal graph, causality, diagnosis
+    #[command(subcommand)]
+    Bond(BondCommand),
+    /// Run the main demonstration: the DC-motor paper's Table 7 diagnosis
+    Demo,
+}
+
+/// The `modelgap bond` subcommands.
+#[derive(Debug, Subcommand)]
+enum BondCommand {
+    /// Print the causal equations, the state space, eigenvalues and the causality
+    Equations(equations::EquationsArgs),
+    /// Simulate a model and write its inputs and outputs as CSV or MCAP
+    Simulate(simulate::SimulateArgs),
+    /// Print the causal graph as Graphviz DOT (or its antecedents/consequents table)
+    Graph(graph::GraphArgs),
+    /// Print the causal stroke of every bond and the causality of the storage elements
+    Causality(causality::CausalityArgs),
+    /// Diagnose a recording: residuals, fault trees, signatures, hypothesis set
+    Diagnose(diagnose::DiagnoseArgs),
+}
+
+/// Runs the command the arguments name.
+///
+/// # Errors
+///
+/// Whatever the command meets, with context naming the file or model concerned.
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Bond(BondCommand::Equations(args)) => equations::run(&args),
+        Command::Bond(BondCommand::Simulate(args)) => simulate::run(&args),
+        Command::Bond(BondCommand::Graph(args)) => graph::run(&args),
+        Command::Bond(BondCommand::Causality(args)) => causality::run(&args),
+        Command::Bond(BondCommand::Diagnose(args)) => diagnose::run(&args),
+        Command::Demo => table7::run_demo(),
+    }
+}
+
+/// An input the user can fix: a missing file, a value out of range, a name that does not
+/// exist. The process exits with code 2 for it, as for argument errors.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct BadInput(pub String);
+
+/// Exit code 2: the input is bad (arguments, model, data); 1: anything else failed.
+const EXIT_BAD_INPUT: u8 = 2;
+/// Exit code 1: the command failed for another reason (a solver, a write).
+const EXIT_FAILURE: u8 = 1;
+
+/// The process exit code for an error: 2 when the user's input is at fault (a bad argument,
+/// a model or data file that is missing or malformed, an unknown name), 1 otherwise.
+pub fn exit_code(err: &anyhow::Error) -> u8 {
+    for cause in err.chain() {
+        if cause.downcast_ref::<BadInput>().is_some() {
+            return EXIT_BAD_INPUT;
+        }
+        if let Some(e) = cause.downcast_ref::<BondError>() {
+            return bond_exit_code(e);
+        }
+        if let Some(e) = cause.downcast_ref::<CoreError>() {
+            return core_exit_code(e);
+        }
+    }
+    EXIT_FAILURE
+}
+
+fn bond_exit_code(e: &BondError) -> u8 {
+    match e {
+        BondError::Ode(_) => EXIT_FAILURE,
+        BondError::Core(core) => core_exit_code(core),
+        // Model files, names, causality, inputs, options: all fixed by changing the input.
+        _ => EXIT_BAD_INPUT,
+    }
+}
+
+fn core_exit_code(e: &CoreError) -> u8 {
+    match e {
+        CoreError::McapWrite { .. } => EXIT_FAILURE,
+        _ => EXIT_BAD_INPUT,
+    }
+}
+
+/// True when the error is a write to a closed pipe (`modelgap ... | head`).
+pub fn is_broken_pipe(err: &anyhow::Error) -> bool {
+    err.chain().any(|cause| {
+        cause
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// Writes `text` to standard output. A closed pipe surfaces as an error that
+/// [`is_broken_pipe`] recognises, instead of a panic as with `print!`.
+fn print(text: &str) -> anyhow::Result<()> {
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())?;
+    out.flush()?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory as _;
+
+    use super::*;
+
+    #[test]
+    fn clap_definitions_are_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn bad_input_and_model_errors_exit_with_2_solver_errors_with_1() {
+        let e = anyhow::Error::new(BadInput("no such file".into())).context("reading x.csv");
+        assert_eq!(exit_code(&e), 2);
+        let e = anyhow::Error::new(BondError::UnknownModel {
+            name: "x".into(),
+            known: "dc-motor".into(),
+        });
+        assert_eq!(exit_code(&e), 2);
+        let e = anyhow::Error::new(BondError::BadOptions("x".into())).context("simulating");
+        assert_eq!(exit_code(&e), 2);
+        let e = anyhow::anyhow!("something else");
+        assert_eq!(exit_code(&e), 1);
+    }
+
+    #[test]
+    fn broken_pipe_is_recognised_through_context() {
+        let e = anyhow::Error::new(std::io::Error::from(std::io::ErrorKind::BrokenPipe))
+            .context("printing");
+        assert!(is_broken_pipe(&e));
+        assert!(!is_broken_pipe(&anyhow::anyhow!("other")));
+    }
+}

@@ -1,0 +1,249 @@
+//! The model every `bond` subcommand takes: `--model` (a file or a built-in name) and
+//! `--set NAME=VALUE`; and the steady state that `--steady-start` starts from.
+
+use std::path::Path;
+
+use anyhow::Context as _;
+use clap::Args;
+use modelgap::bond::compiled::CompiledModel;
+use modelgap::bond::file::read_model_path;
+use modelgap::bond::library::{self, BUILTINS};
+use modelgap::bond::{BondGraph, StateSpace};
+
+use super::BadInput;
+
+/// Newton iterations allowed to find a steady state (a linear model needs one).
+const STEADY_MAX_ITERATIONS: usize = 50;
+
+/// A steady state is reached when every state derivative is below this, relative to the
+/// state's own scale (`max(|x|, 1)`), per second.
+const STEADY_TOLERANCE: f64 = 1e-10;
+
+/// Which model to use and which of its values to change.
+#[derive(Debug, Args)]
+pub struct ModelArgs {
+    /// Model file (.toml) or built-in model name (dc-motor, buck-motor)
+    #[arg(long, value_name = "MODEL")]
+    pub model: String,
+
+    /// Set a parameter, or an input's default value, before anything else (repeatable)
+    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_assignment)]
+    pub set: Vec<Assignment>,
+}
+
+/// A `NAME=VALUE` pair of `--set`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Assignment {
+    /// The parameter or input.
+    pub name: String,
+    /// Its new value (finite).
+    pub value: f64,
+}
+
+/// Parses `NAME=VALUE` with a finite number as the value.
+pub fn parse_assignment(text: &str) -> Result<Assignment, String> {
+    let (name, value) = text
+        .split_once('=')
+        .ok_or_else(|| format!("expected NAME=VALUE, found `{text}`"))?;
+    let name = name.trim();
+    if name.is_empty() {
+        return Err(format!("expected NAME=VALUE, found no name in `{text}`"));
+    }
+    let value = parse_number(value).map_err(|e| format!("{e} for `{name}`"))?;
+    Ok(Assignment {
+        name: name.to_owned(),
+        value,
+    })
+}
+
+/// Parses a finite number; the error says what was found.
+pub fn parse_number(text: &str) -> Result<f64, String> {
+    let text = text.trim();
+    match text.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(_) => Err(format!("`{text}` is not a finite number")),
+        Err(_) => Err(format!("`{text}` is not a number")),
+    }
+}
+
+/// The built-in model names, comma-separated.
+pub fn builtin_names() -> String {
+    BUILTINS
+        .iter()
+        .map(|(name, _)| *name)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Loads the model: the file at `--model` if there is one, else the built-in of that name;
+/// then applies every `--set`.
+///
+/// # Errors
+///
+/// A missing file or unknown built-in (the message lists the built-ins), a model file that
+/// does not read, a `--set` of an unknown name.
+pub fn load(args: &ModelArgs) -> anyhow::Result<BondGraph> {
+    let path = Path::new(&args.model);
+    let mut g = if path.is_file() {
+        read_model_path(path).with_context(|| format!("loading model {}", path.display()))?
+    } else if looks_like_path(&args.model) {
+        return Err(BadInput(format!(
+            "model file {} not found (built-in models: {})",
+            path.display(),
+            builtin_names()
+        ))
+        .into());
+    } else {
+        library::builtin(&args.model).with_context(|| {
+            format!(
+                "`{}` is neither a model file nor a built-in model",
+                args.model
+            )
+        })?
+    };
+    for a in &args.set {
+        g.set_param(&a.name, a.value)
+            .with_context(|| format!("applying --set {}={}", a.name, a.value))?;
+    }
+    Ok(g)
+}
+
+/// True for text that names a file rather than a built-in model.
+fn looks_like_path(text: &str) -> bool {
+    text.contains('/') || text.contains('\\') || text.to_ascii_lowercase().ends_with(".toml")
+}
+
+/// The steady state of `g` under constant inputs `u` (in the model's input order): Newton's
+/// method on `ẋ = f(x, u) = 0` from rest, with the Jacobian of the linearisation. Exact after
+/// one step for a model that is affine in its states.
+///
+/// # Errors
+///
+/// Model errors; [`BadInput`] when the model has no steady state there (a singular Jacobian,
+/// such as a free integrator, or no convergence).
+pub fn steady_state(g: &BondGraph, u: &[f64]) -> anyhow::Result<Vec<f64>> {
+    let model = CompiledModel::new(g)?;
+    let n = model.n_states();
+    let mut x = vec![0.0; n];
+    let mut dx = vec![0.0; n];
+    let mut scratch = model.scratch();
+    for _ in 0..STEADY_MAX_ITERATIONS {
+        model.eval(0.0, &x, u, &mut scratch);
+        model.read_derivatives(&scratch, &mut dx);
+        let converged = x
+            .iter()
+            .zip(&dx)
+            .all(|(xi, di)| di.abs() <= STEADY_TOLERANCE * xi.abs().max(1.0));
+        if converged {
+            return Ok(x);
+        }
+        let ss = StateSpace::of_compiled(&model, Some(&x), Some(u));
+        let rhs = modelgap::math::DVector::from_column_slice(&dx);
+        let step = ss.a.lu().solve(&rhs).ok_or_else(|| {
+            BadInput(format!(
+                "model {} has no steady state: its state matrix is singular (a free integrator?)",
+                g.name
+            ))
+        })?;
+        for (xi, si) in x.iter_mut().zip(step.iter()) {
+            *xi -= si;
+        }
+    }
+    Err(BadInput(format!(
+        "no steady state of model {} found in {STEADY_MAX_ITERATIONS} Newton steps",
+        g.name
+    ))
+    .into())
+}
+
+/// The outputs of `g` at state `x` and inputs `u`, in the model's output order.
+///
+/// # Errors
+///
+/// Model errors.
+pub fn outputs_at(g: &BondGraph, x: &[f64], u: &[f64]) -> anyhow::Result<Vec<f64>> {
+    let model = CompiledModel::new(g)?;
+    let mut scratch = model.scratch();
+    model.eval(0.0, x, u, &mut scratch);
+    let mut y = vec![0.0; model.n_outputs()];
+    model.read_outputs(&scratch, &mut y);
+    Ok(y)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn assignment_parses_and_names_the_bad_pair() {
+        assert_eq!(
+            parse_assignment("R=1.2"),
+            Ok(Assignment {
+                name: "R".into(),
+                value: 1.2
+            })
+        );
+        let e = parse_assignment("X=abc").unwrap_err();
+        assert!(e.contains("`abc`") && e.contains("`X`"), "{e}");
+        assert!(parse_assignment("R").is_err());
+        assert!(parse_assignment("=1").is_err());
+        assert!(parse_assignment("R=inf").is_err());
+    }
+
+    #[test]
+    fn unknown_model_lists_the_builtins() {
+        let args = ModelArgs {
+            model: "no-such-motor".into(),
+            set: vec![],
+        };
+        let e = load(&args).unwrap_err();
+        let chain = format!("{e:#}");
+        assert!(
+            chain.contains("dc-motor") && chain.contains("buck-motor"),
+            "{chain}"
+        );
+        let args = ModelArgs {
+            model: "missing/model.toml".into(),
+            set: vec![],
+        };
+        let chain = format!("{:#}", load(&args).unwrap_err());
+        assert!(chain.contains("missing/model.toml") && chain.contains("dc-motor"));
+    }
+
+    #[test]
+    fn set_changes_a_parameter_and_rejects_unknown_names() {
+        let mut args = ModelArgs {
+            model: "dc-motor".into(),
+            set: vec![parse_assignment("R=2").unwrap()],
+        };
+        assert_eq!(load(&args).unwrap().param("R").unwrap(), 2.0);
+        args.set = vec![parse_assignment("X=1").unwrap()];
+        let chain = format!("{:#}", load(&args).unwrap_err());
+        assert!(chain.contains("X=1") && chain.contains("beta"), "{chain}");
+    }
+
+    #[test]
+    fn steady_state_of_the_dc_motor_matches_closed_form() {
+        let g = library::dc_motor();
+        let x = steady_state(&g, &[12.0, 0.0]).unwrap();
+        let y = outputs_at(&g, &x, &[12.0, 0.0]).unwrap();
+        // ω = kV / (Rβ + k²); the linear model is solved in one Newton step.
+        let omega = 0.05 * 12.0 / (1e-5 + 0.0025);
+        assert!((y[1] - omega).abs() < 1e-6 * omega, "{y:?}");
+    }
+
+    #[test]
+    fn steady_state_of_the_buck_motor_holds_still() {
+        // The switch multiplies two inputs (m · Vs): the model is not affine in its inputs,
+        // so the steady state must come from f(x, u) = 0 itself.
+        let g = library::buck_motor();
+        let u: Vec<f64> = g.inputs().values().map(|i| i.default).collect();
+        let x = steady_state(&g, &u).unwrap();
+        let model = CompiledModel::new(&g).unwrap();
+        let mut scratch = model.scratch();
+        let mut dx = vec![0.0; model.n_states()];
+        model.eval(0.0, &x, &u, &mut scratch);
+        model.read_derivatives(&scratch, &mut dx);
+        assert!(dx.iter().all(|d| d.abs() < 1e-6), "{dx:?}");
+    }
+}
