@@ -4,6 +4,7 @@
 //! [`model`] loads the model every `bond` subcommand takes, [`format`] prints numbers and
 //! matrices, [`noise`] is the seeded Gaussian generator of `simulate --noise`.
 
+mod arr;
 mod bench;
 mod causality;
 mod diagnose;
@@ -51,6 +52,12 @@ enum BondCommand {
     Causality(causality::CausalityArgs),
     /// Diagnose a recording: residuals, fault trees, signatures, hypothesis set
     Diagnose(diagnose::DiagnoseArgs),
+    /// Analytical redundancy relations, fault signature matrix, detectability and isolability
+    Arr(arr::ArrArgs),
+    /// The paper's Table 7: every ±20 % fault of the buck-motor simulated, detected, diagnosed
+    Table7(table7::Table7Args),
+    /// Time the simulator on the reference runs (DC motor 0-4 s, PWM buck-motor 0-1 s)
+    Bench(bench::BenchArgs),
 }
 
 /// Runs the command the arguments name.
@@ -65,6 +72,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Bond(BondCommand::Graph(args)) => graph::run(&args),
         Command::Bond(BondCommand::Causality(args)) => causality::run(&args),
         Command::Bond(BondCommand::Diagnose(args)) => diagnose::run(&args),
+        Command::Bond(BondCommand::Arr(args)) => arr::run(&args),
+        Command::Bond(BondCommand::Table7(args)) => table7::run(&args),
+        Command::Bond(BondCommand::Bench(args)) => bench::run(&args),
         Command::Demo => table7::run_demo(),
     }
 }

@@ -95,6 +95,10 @@ pub struct Signature {
     pub output: String,
     /// Magnitude, first-derivative and second-derivative symbols.
     pub orders: [Sym; ORDERS],
+    /// When the first effect of the full propagation is discarded (it runs
+    /// through a fast storage element), its order and sign: sampled slower
+    /// than that element settles, it shows as a jump of this sign.
+    pub fast: Option<(usize, Sym)>,
 }
 
 impl Signature {
@@ -126,7 +130,9 @@ impl fmt::Display for Signature {
 /// Predicts the signature of `fault` on every measured output.
 ///
 /// `fast` lists the states (`p3`) whose local time constant is too small for
-/// their integrations to be observed; effects that need them are discarded.
+/// their integrations to be observed; effects that need them are discarded,
+/// and a first effect that a later effect through them opposes becomes
+/// ambiguous (it is over before the next sample).
 pub fn predict(cg: &CausalGraph, fault: &Hypothesis, fast: &BTreeSet<Var>) -> Vec<Signature> {
     let full = propagate(cg, fault, &BTreeSet::new());
     let slow = if fast.is_empty() {
@@ -138,6 +144,7 @@ pub fn predict(cg: &CausalGraph, fault: &Hypothesis, fast: &BTreeSet<Var>) -> Ve
         .iter()
         .map(|(name, v)| {
             let mut orders = [Sym::Zero; ORDERS];
+            let mut fast_effect = None;
             for (j, o) in orders.iter_mut().enumerate() {
                 let f = full[j].get(v).copied().unwrap_or(Sym::Zero);
                 let s = slow[j].get(v).copied().unwrap_or(Sym::Zero);
@@ -146,10 +153,32 @@ pub fn predict(cg: &CausalGraph, fault: &Hypothesis, fast: &BTreeSet<Var>) -> Ve
                 } else {
                     s
                 };
+                if fast_effect.is_none() && f != Sym::Zero {
+                    fast_effect = Some((j, f));
+                }
+            }
+            let fast = fast_effect.filter(|&(j, _)| orders[j] == Sym::Discarded);
+            // A slow first effect that a later effect through a fast element
+            // opposes is over within that element's time constant: sampled
+            // slower, its sign cannot be relied on.
+            let first = orders
+                .iter()
+                .position(|o| !matches!(o, Sym::Zero | Sym::Discarded));
+            if let Some(k) = first {
+                let s = orders[k];
+                let opposed = (k + 1..ORDERS).any(|j| {
+                    let f = full[j].get(v).copied().unwrap_or(Sym::Zero);
+                    let sl = slow[j].get(v).copied().unwrap_or(Sym::Zero);
+                    f != sl && f != s && f != Sym::Zero
+                });
+                if opposed {
+                    orders[k] = Sym::Ambiguous;
+                }
             }
             Signature {
                 output: name.clone(),
                 orders,
+                fast,
             }
         })
         .collect()
@@ -265,31 +294,41 @@ impl fmt::Display for ObservedSignature {
 ///   effects); an estimated order may be one off (fast dynamics blur it).
 /// - A measurement still quiet matches anything (a slow effect, or a jump
 ///   smaller than the noise).
+/// - An effect through a fast storage element (discarded) matches a change
+///   of its sign, jump or not: at the sampling it shows as either.
 /// - Ambiguous components match either sign; an output with no predicted
 ///   effect must show no deviation.
 pub fn matches(predicted: &Signature, observed: &ObservedSignature) -> bool {
-    let Some((k, s)) = predicted.first_effect() else {
-        // Nothing predicted (or only discarded effects): a small deviation
-        // could come from the discarded fast part; a jump cannot.
-        let only_discarded = predicted.orders.contains(&Sym::Discarded);
-        return observed.magnitude == Qual::Zero || only_discarded && !observed.jump;
-    };
     if observed.magnitude == Qual::Zero {
-        // Not out of its band yet: consistent with a slow effect, and with a
-        // jump too small for the band.
+        // Still quiet: consistent with a slow effect, and with a jump too
+        // small to see.
         return true;
     }
+    let same_sign = |s: Sym| s.qual().is_none_or(|q| q == observed.magnitude);
+    // A fast first effect shows as a jump of its sign at this sampling, or,
+    // when the sampling resolves it, as a derivative change of that sign.
+    if let Some((_, s)) = predicted.fast
+        && same_sign(s)
+    {
+        return true;
+    }
+    let Some((k, s)) = predicted.first_effect() else {
+        return false;
+    };
     if observed.jump != (k == 0) {
         return false;
     }
-    // Orders estimated from growth blur under fast dynamics: allow one off.
+    // Orders estimated from growth blur under fast dynamics: allow one off,
+    // and any order when fast elements shape the prediction.
+    let blurred = predicted
+        .orders
+        .iter()
+        .any(|o| matches!(o, Sym::Ambiguous | Sym::Discarded));
     if let Some(ko) = observed.order
         && ko.abs_diff(k) > 1
+        && !blurred
     {
         return false;
     }
-    match s.qual() {
-        Some(q) => observed.magnitude == q,
-        None => true, // ambiguous: either sign
-    }
+    same_sign(s)
 }

@@ -55,12 +55,3 @@ fn printed_equations_read_as_the_paper() {
     println!("{text}");
     println!("{}", equations_latex(&g, &eqs));
 }
-
-#[test]
-fn table7_prints() {
-    let rows = modelgap_bond::table7::table7(&Default::default()).unwrap();
-    println!("{}", modelgap_bond::table7::table7_text(&rows));
-    for r in &rows {
-        println!("{} {:?}", r.fault, r.stages);
-    }
-}
