@@ -240,6 +240,7 @@ pub fn diagnose(g: &BondGraph, rec: &Recording, opts: &DiagnosisOptions) -> Resu
     let input_names: Vec<String> = g.inputs().keys().cloned().collect();
     let inputs = Inputs::from_recording(rec, &input_names);
     let mut sim = opts.sim.clone();
+    let mut warnings = Vec::new();
     if opts.steady_start && sim.initial_state.is_none() {
         let model = crate::compiled::CompiledModel::new(g)?;
         let u0: Vec<f64> = input_names
@@ -247,7 +248,12 @@ pub fn diagnose(g: &BondGraph, rec: &Recording, opts: &DiagnosisOptions) -> Resu
             .zip(&model.input_defaults)
             .map(|(n, d)| rec.signal(n).map_or(*d, |s| s.values[0]))
             .collect();
-        sim.initial_state = model.steady_state(&u0, None).ok();
+        match model.steady_state(&u0, None) {
+            Ok(x) => sim.initial_state = Some(x),
+            Err(e) => warnings.push(format!(
+                "no steady state to start from ({e}); the parallel model starts at rest"
+            )),
+        }
     }
     let nominal = simulate(g, &inputs, rec.t(), &sim)?;
     let t = rec.t();
@@ -320,7 +326,7 @@ pub fn diagnose(g: &BondGraph, rec: &Recording, opts: &DiagnosisOptions) -> Resu
         fast_states,
         stages: Vec::new(),
         hypotheses: BTreeSet::new(),
-        warnings: Vec::new(),
+        warnings,
     };
     let Some(t_det) = detected_at else {
         return Ok(diag);

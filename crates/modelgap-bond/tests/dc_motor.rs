@@ -52,6 +52,40 @@ fn printed_equations_read_as_the_paper() {
     let c = assign_causality(&g).unwrap();
     let eqs = Equations::derive(&g, &c).unwrap();
     let text = equations_text(&g, &eqs);
-    println!("{text}");
-    println!("{}", equations_latex(&g, &eqs));
+    // The paper's eq. 3-12 (dp3 is ṗ3; the paper writes eq. 5 as e8 = e5 − e6 − e7 = ṗ8).
+    for line in [
+        "dp3 = e1 - e2 - e4",
+        "f1 = f2 = f3 = f4",
+        "dp8 = e5 - e6 - e7",
+        "f5 = f6 = f7 = f8",
+        "e2 = R*f2",
+        "f3 = p3/L",
+        "f8 = p8/J",
+        "e6 = beta*f6",
+        "e4 = k*f5",
+        "e5 = k*f4",
+    ] {
+        assert!(
+            text.lines().any(|l| l.trim() == line),
+            "missing `{line}` in\n{text}"
+        );
+    }
+    // Eq. 13 and 14.
+    assert!(
+        text.contains(
+            "[dp3; dp8] = [[-R/L, -k/J], [k/L, -beta/J]] [p3; p8] + [[1, 0], [0, -1]] [V; tau_L]"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains("[i; omega] = [[1/L, 0], [0, 1/J]] [p3; p8]"),
+        "{text}"
+    );
+    let latex = equations_latex(&g, &eqs);
+    assert!(
+        latex.contains(r"\dot{p}_{3} &= e_{1} - e_{2} - e_{4}"),
+        "{latex}"
+    );
+    assert!(latex.contains(r"-\frac{R}{L} & -\frac{k}{J}"), "{latex}");
+    assert!(latex.contains(r"\frac{k}{L} & -\frac{\beta}{J}"), "{latex}");
 }
