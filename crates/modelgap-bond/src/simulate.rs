@@ -799,6 +799,7 @@ fn exact_lti(
     grid.dedup_by(|x, y| (*x - *y).abs() <= 1e-12 * x.abs().max(1.0));
     let mut cache: Vec<(f64, Discrete)> = Vec::new();
     let mut x = DVector::from_column_slice(x0);
+    let mut x_next = DVector::zeros(n);
     let mut w0 = DVector::zeros(m + 1);
     let mut w1 = DVector::zeros(m + 1);
     let mut cursors = vec![0usize; m];
@@ -830,8 +831,14 @@ fn exact_lti(
         }
         w0[m] = 1.0;
         w1[m] = 1.0;
-        let dw = &w1 - &w0;
-        x = &d.phi * &x + &d.gamma0 * &w0 + &d.gamma1 * dw;
+        // x⁺ = Φ x + Γ0 w0 + Γ1 (w1 − w0), without allocating.
+        for (a, b) in w1.iter_mut().zip(w0.iter()) {
+            *a -= b;
+        }
+        x_next.gemv(1.0, &d.phi, &x, 0.0);
+        x_next.gemv(1.0, &d.gamma0, &w0, 1.0);
+        x_next.gemv(1.0, &d.gamma1, &w1, 1.0);
+        std::mem::swap(&mut x, &mut x_next);
         steps += 1;
         t = t_next;
         if k_out < t_out.len() && (t - t_out[k_out]).abs() <= 1e-12 * t.abs().max(1.0) {

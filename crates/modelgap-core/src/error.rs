@@ -295,6 +295,23 @@ pub enum CoreError {
         path: Option<PathBuf>,
     },
 
+    /// A model (a bond graph, a cloth scene) could not predict or be edited;
+    /// the message is the domain crate's error, naming the element or parameter.
+    #[error("{message}")]
+    Model {
+        /// What went wrong, from the model's own error.
+        message: String,
+    },
+
+    /// A fit could not run (no parameters, a non-finite residual at the start).
+    #[error("fit of {what}: {reason}")]
+    Fit {
+        /// What was being fitted (a candidate's name).
+        what: String,
+        /// Why it could not run.
+        reason: String,
+    },
+
     /// A file extension that names no supported format.
     #[error("unknown file extension `{extension}`: expected `csv` or `mcap`{}", in_path(.path))]
     UnknownExtension {
@@ -354,7 +371,9 @@ impl CoreError {
             | Self::UnknownExtension { path, .. } => path.as_deref(),
             Self::UnknownSignal { .. }
             | Self::LengthMismatch { .. }
-            | Self::InvalidArgument { .. } => None,
+            | Self::InvalidArgument { .. }
+            | Self::Model { .. }
+            | Self::Fit { .. } => None,
         }
     }
 
@@ -383,7 +402,9 @@ impl CoreError {
             | Self::UnknownExtension { path, .. } => Some(path),
             Self::UnknownSignal { .. }
             | Self::LengthMismatch { .. }
-            | Self::InvalidArgument { .. } => None,
+            | Self::InvalidArgument { .. }
+            | Self::Model { .. }
+            | Self::Fit { .. } => None,
         }
     }
 }

@@ -37,14 +37,28 @@
 //!   [`residual::effective_sample_size`], [`residual::Threshold`],
 //!   [`residual::failure_windows`], [`residual::first_exceedance`],
 //!   [`residual::savgol_derivatives`].
+//! - [`fit`]: [`fit::fit`], bounded Levenberg–Marquardt for a [`fit::ResidualProblem`],
+//!   with [`fit::FitOptions`], [`fit::FitReport`] and a [`fit::Cancel`] flag.
+//! - [`report`]: the HTML report page with SVG plots, and the comparison MCAP for Foxglove.
 //! - [`math`]: the nalgebra aliases used across modelgap.
 //! - [`error`]: [`CoreError`] and [`Result`].
 
+pub mod compare;
+pub mod effect;
 pub mod error;
+pub mod explain;
+pub mod fit;
 pub mod io;
 pub mod math;
+pub mod model;
 pub mod recording;
+pub mod report;
 pub mod residual;
+pub mod story;
 
+pub use compare::{CompareOptions, Comparison, OutputComparison, compare};
+pub use effect::{Candidate, Effect, EffectKind, EffectParam};
 pub use error::{CoreError, Location, Result};
+pub use explain::{ExplainOptions, Explanation, RankedCandidate, Verdict, explain};
+pub use model::{Model, Prediction};
 pub use recording::{Recording, Signal};

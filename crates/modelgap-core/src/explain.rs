@@ -1,0 +1,1010 @@
+//! explain: which physical effect is the model missing? The effect-ranking
+//! loop, in one file.
+//!
+//! 1. The model's residual on the recording, weighted per output by its
+//!    noise floor, gives the starting cost.
+//! 2. Every candidate effect the model offers is fitted (bounded
+//!    Levenberg–Marquardt on the simulation error; grid starts for
+//!    parameters a local fit cannot find, such as a fault time), in parallel.
+//! 3. Candidates are ranked by the error they remove, penalised by their
+//!    number of parameters: `score = n_eff · ln(cost_before / cost_after) −
+//!    k · ln(n_eff)` (a BIC difference) where `n_eff` is the effective number
+//!    of independent samples of the best fit's residual — coloured noise has
+//!    fewer independent samples than it has samples, and a plain BIC would
+//!    let a candidate "explain" noise.
+//! 4. No candidate scores above the significance threshold: the verdict is
+//!    "nothing is missing". Otherwise the best is chosen; if it leaves a
+//!    residual well above the noise floor, a second effect is fitted on top
+//!    of it; if the chosen effects still leave the floor far behind, the
+//!    verdict is a partial explanation, with what remains and where.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::compare::{CompareOptions, noise_floor, shared_outputs};
+use crate::effect::{Candidate, Effect};
+use crate::error::{CoreError, Result};
+use crate::fit::{Cancel, FitOptions, FitReport, ResidualProblem, Termination, fit};
+use crate::model::Model;
+use crate::recording::Recording;
+use crate::residual::{FailureWindow, failure_windows, rms};
+
+/// A progress callback: `(done, total)` candidate fits.
+pub type Progress = Arc<dyn Fn(usize, usize) + Send + Sync>;
+
+/// Options of [`explain`].
+#[derive(Clone)]
+pub struct ExplainOptions {
+    /// Noise floors given by the user, by output; others are estimated.
+    pub noise: BTreeMap<String, f64>,
+    /// Score a candidate must beat to count as found (a BIC difference).
+    /// Default 10 ("very strong evidence").
+    pub significance: f64,
+    /// An effect explains the recording when every output's RMS after it is
+    /// within this factor of its noise floor. Default 1.3.
+    pub floor_factor: f64,
+    /// Most effects chosen on top of each other (1 or 2). Default 2.
+    pub max_effects: usize,
+    /// Only these candidate ids (all when empty).
+    pub only: Vec<String>,
+    /// Options of each fit.
+    pub fit: FitOptions,
+    /// Called after each candidate fit.
+    pub progress: Option<Progress>,
+    /// Stops the loop between fits (results so far are kept).
+    pub cancel: Option<Arc<Cancel>>,
+}
+
+impl Default for ExplainOptions {
+    fn default() -> ExplainOptions {
+        ExplainOptions {
+            noise: BTreeMap::new(),
+            significance: 10.0,
+            floor_factor: 1.3,
+            max_effects: 2,
+            only: Vec::new(),
+            fit: FitOptions::default(),
+            progress: None,
+            cancel: None,
+        }
+    }
+}
+
+impl std::fmt::Debug for ExplainOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ExplainOptions")
+            .field("noise", &self.noise)
+            .field("significance", &self.significance)
+            .field("floor_factor", &self.floor_factor)
+            .field("max_effects", &self.max_effects)
+            .field("only", &self.only)
+            .finish_non_exhaustive()
+    }
+}
+
+/// The answer of [`explain`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Verdict {
+    /// The residual is what noise leaves: no effect is missing.
+    NothingMissing,
+    /// One effect explains the recording down to the noise floor.
+    EffectFound,
+    /// Two effects together explain it.
+    TwoEffects,
+    /// The best effects help but leave a residual above the floor: the true
+    /// effect is probably not on the menu.
+    Partial,
+}
+
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Verdict::NothingMissing => "nothing-missing",
+            Verdict::EffectFound => "effect-found",
+            Verdict::TwoEffects => "two-effects",
+            Verdict::Partial => "partial",
+        })
+    }
+}
+
+/// One fitted parameter.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FittedParam {
+    /// Name.
+    pub name: String,
+    /// Unit.
+    pub unit: String,
+    /// Fitted value.
+    pub value: f64,
+    /// Standard error, scaled for the residual's effective sample size
+    /// (infinite when the parameter sits at a bound).
+    pub std_error: f64,
+}
+
+/// A candidate after its fit.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RankedCandidate {
+    /// The candidate.
+    pub candidate: Candidate,
+    /// Fitted parameters.
+    pub params: Vec<FittedParam>,
+    /// RMS per output after adding the effect, in the order of
+    /// [`Explanation::outputs`].
+    pub rms_after: Vec<f64>,
+    /// Weighted cost after (½ Σ (r/σ)²).
+    pub cost: f64,
+    /// `n_eff ln(cost_before/cost) − k ln(n_eff)`: the evidence for the effect.
+    pub score: f64,
+    /// How the fit ended.
+    pub termination: Termination,
+    /// Whether the model's qualitative reasoning (fault trees, signatures)
+    /// agrees, when it has any.
+    pub qualitative: Option<bool>,
+    /// Why the fit failed, if it did (the candidate then ranks last).
+    pub error: Option<String>,
+}
+
+impl RankedCandidate {
+    /// The fitted effect.
+    pub fn effect(&self) -> Effect {
+        Effect {
+            candidate: self.candidate.clone(),
+            values: self.params.iter().map(|p| p.value).collect(),
+        }
+    }
+}
+
+/// What one output looks like before and after the chosen effects.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct OutputSummary {
+    /// Output name.
+    pub name: String,
+    /// Unit.
+    pub unit: String,
+    /// Noise floor (σ).
+    pub noise_floor: f64,
+    /// RMS of the residual of the model as given.
+    pub rms_before: f64,
+    /// RMS after the chosen effects (equal to before when nothing is missing).
+    pub rms_after: f64,
+    /// Where the residual after the chosen effects still leaves a 4σ band.
+    pub remaining_windows: Vec<FailureWindow>,
+}
+
+/// The result of [`explain`].
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Explanation {
+    /// Model name.
+    pub model: String,
+    /// The answer.
+    pub verdict: Verdict,
+    /// Per output: floor, RMS before and after.
+    pub outputs: Vec<OutputSummary>,
+    /// Every candidate, best first.
+    pub ranked: Vec<RankedCandidate>,
+    /// The effects chosen (none, one, or two on top of each other).
+    pub chosen: Vec<RankedCandidate>,
+    /// Score of the best minus score of the runner-up.
+    pub margin: f64,
+    /// Effective sample size used for the scores.
+    pub effective_samples: f64,
+    /// Weighted cost of the model as given.
+    pub cost_before: f64,
+    /// Non-fatal findings.
+    pub warnings: Vec<String>,
+}
+
+impl Explanation {
+    /// The chosen effects, ready for [`Model::with_effects`].
+    pub fn effects(&self) -> Vec<Effect> {
+        self.chosen.iter().map(RankedCandidate::effect).collect()
+    }
+}
+
+/// The data every fit shares: measurements and weights of the shared outputs.
+struct Target<'a> {
+    model: &'a dyn Model,
+    rec: &'a Recording,
+    names: Vec<String>,
+    measured: Vec<&'a [f64]>,
+    sigma: Vec<f64>,
+}
+
+impl Target<'_> {
+    fn n_residuals(&self) -> usize {
+        self.names.len() * self.rec.len()
+    }
+
+    /// Weighted residuals of the model with `effects` into `out`.
+    fn residuals(&self, effects: &[(&Candidate, &[f64])], out: &mut [f64]) -> Result<()> {
+        let pred = self.model.predict_with(self.rec, effects)?;
+        let n = self.rec.len();
+        for (j, name) in self.names.iter().enumerate() {
+            let p = pred.get(name).ok_or_else(|| CoreError::Model {
+                message: format!("the model did not predict output '{name}'"),
+            })?;
+            for k in 0..n {
+                out[j * n + k] = (self.measured[j][k] - p[k]) / self.sigma[j];
+            }
+        }
+        Ok(())
+    }
+
+    fn rms_per_output(&self, weighted: &[f64]) -> Vec<f64> {
+        let n = self.rec.len();
+        (0..self.names.len())
+            .map(|j| rms(&weighted[j * n..(j + 1) * n]) * self.sigma[j])
+            .collect()
+    }
+
+    fn n_eff(&self, weighted: &[f64]) -> f64 {
+        let n = self.rec.len();
+        (0..self.names.len())
+            .map(|j| noise_effective_samples(&weighted[j * n..(j + 1) * n]))
+            .sum()
+    }
+}
+
+/// Effective number of independent noise samples in a residual, robust to a
+/// systematic misfit: the noise is taken as AR(1) with coefficient ρ, read
+/// from the first differences of the residual (for AR(1) noise their lag-1
+/// autocorrelation is −(1 − ρ)/2, whatever smooth misfit rides on top), and
+/// `n_eff = n (1 − ρ)/(1 + ρ)`.
+pub fn noise_effective_samples(r: &[f64]) -> f64 {
+    let n = r.len();
+    if n < 4 {
+        return n as f64;
+    }
+    let d: Vec<f64> = r.windows(2).map(|w| w[1] - w[0]).collect();
+    let mean = d.iter().sum::<f64>() / d.len() as f64;
+    let c0: f64 = d.iter().map(|x| (x - mean) * (x - mean)).sum();
+    if c0 <= 0.0 {
+        return n as f64;
+    }
+    let c1: f64 = d.windows(2).map(|w| (w[0] - mean) * (w[1] - mean)).sum();
+    let rho = (1.0 + 2.0 * c1 / c0).clamp(0.0, 0.999);
+    (n as f64 * (1.0 - rho) / (1.0 + rho)).max(1.0)
+}
+
+/// A fit of one candidate on top of fixed effects; `fixed[i]` pins parameter i.
+struct CandidateProblem<'a> {
+    target: &'a Target<'a>,
+    base: &'a [Effect],
+    candidate: &'a Candidate,
+    fixed: Vec<Option<f64>>,
+}
+
+impl CandidateProblem<'_> {
+    fn full(&self, free: &[f64]) -> Vec<f64> {
+        let mut it = free.iter();
+        self.fixed
+            .iter()
+            .map(|f| f.unwrap_or_else(|| *it.next().unwrap_or(&0.0)))
+            .collect()
+    }
+}
+
+impl ResidualProblem for CandidateProblem<'_> {
+    fn n_params(&self) -> usize {
+        self.fixed.iter().filter(|f| f.is_none()).count()
+    }
+
+    fn n_residuals(&self) -> usize {
+        self.target.n_residuals()
+    }
+
+    fn residuals(&self, params: &[f64], out: &mut [f64]) -> Result<()> {
+        let full = self.full(params);
+        let mut effects: Vec<(&Candidate, &[f64])> = self
+            .base
+            .iter()
+            .map(|e| (&e.candidate, e.values.as_slice()))
+            .collect();
+        effects.push((self.candidate, &full));
+        self.target.residuals(&effects, out)
+    }
+}
+
+/// A joint fit of two candidates (on top of nothing else): the parameters
+/// of `first` then those of `second`.
+struct PairProblem<'a> {
+    target: &'a Target<'a>,
+    first: &'a Candidate,
+    second: &'a Candidate,
+}
+
+impl ResidualProblem for PairProblem<'_> {
+    fn n_params(&self) -> usize {
+        self.first.params.len() + self.second.params.len()
+    }
+
+    fn n_residuals(&self) -> usize {
+        self.target.n_residuals()
+    }
+
+    fn residuals(&self, params: &[f64], out: &mut [f64]) -> Result<()> {
+        let (a, b) = params.split_at(self.first.params.len());
+        self.target
+            .residuals(&[(self.first, a), (self.second, b)], out)
+    }
+}
+
+/// Fits `first` and `second` jointly from `start` (their values in that
+/// order). Returns the two fitted effects' values, the report and the
+/// weighted residual.
+fn fit_pair(
+    target: &Target,
+    first: &Candidate,
+    second: &Candidate,
+    start: &[f64],
+    opts: &ExplainOptions,
+) -> Result<(FitReport, Vec<f64>)> {
+    let problem = PairProblem {
+        target,
+        first,
+        second,
+    };
+    let params: Vec<&crate::effect::EffectParam> =
+        first.params.iter().chain(&second.params).collect();
+    let bounds: Vec<(f64, f64)> = params.iter().map(|p| (p.lower, p.upper)).collect();
+    let scales: Vec<f64> = params.iter().map(|p| p.scale).collect();
+    let mut fit_opts = opts.fit.clone();
+    fit_opts.name = format!("{} + {}", first.name, second.name);
+    let report = fit(
+        &problem,
+        start,
+        &bounds,
+        &scales,
+        &fit_opts,
+        opts.cancel.as_deref(),
+    )?;
+    let mut weighted = vec![0.0; problem.n_residuals()];
+    problem.residuals(&report.params, &mut weighted)?;
+    Ok((report, weighted))
+}
+
+/// The candidate with its bounds fitted to the recording: a fault time lies
+/// inside it, two samples from either end.
+fn prepared(c: &Candidate, rec: &Recording) -> Candidate {
+    let mut c = c.clone();
+    let t = rec.t();
+    if let (Some(&t0), Some(&t1)) = (t.first(), t.last()) {
+        let dt = if t.len() > 1 {
+            (t1 - t0) / (t.len() - 1) as f64
+        } else {
+            0.0
+        };
+        for p in &mut c.params {
+            if p.name == "t_fault" && p.unit == "s" {
+                p.lower = t0 + 2.0 * dt;
+                p.upper = (t1 - 2.0 * dt).max(p.lower);
+                p.initial = 0.5 * (p.lower + p.upper);
+                p.scale = (t1 - t0) / 20.0;
+                if p.grid == 0 {
+                    p.grid = 24;
+                }
+            }
+        }
+    }
+    c
+}
+
+/// Result of fitting one candidate (before scoring).
+struct Fitted {
+    candidate: Candidate,
+    values: Vec<f64>,
+    report: Option<FitReport>,
+    cost: f64,
+    weighted: Vec<f64>,
+    error: Option<String>,
+}
+
+/// Fits one candidate on top of `base`: grid starts for grid parameters,
+/// then a local fit of every parameter from the best start.
+fn fit_candidate(
+    target: &Target,
+    base: &[Effect],
+    candidate: &Candidate,
+    opts: &ExplainOptions,
+) -> Fitted {
+    let c = prepared(candidate, target.rec);
+    let mut fit_opts = opts.fit.clone();
+    fit_opts.name = c.name.clone();
+    let cancel = opts.cancel.as_deref();
+    let bounds: Vec<(f64, f64)> = c.params.iter().map(|p| (p.lower, p.upper)).collect();
+    let scales: Vec<f64> = c.params.iter().map(|p| p.scale).collect();
+    let failed = |error: String| Fitted {
+        candidate: c.clone(),
+        values: c.initial(),
+        report: None,
+        cost: f64::INFINITY,
+        weighted: Vec::new(),
+        error: Some(error),
+    };
+    // Grid starts: the cartesian product of each grid parameter's points.
+    let grid_axes: Vec<(usize, Vec<f64>)> = c
+        .params
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.grid > 0)
+        .map(|(i, p)| {
+            let n = p.grid.max(1);
+            let pts = (0..n)
+                .map(|k| {
+                    if n == 1 {
+                        p.initial
+                    } else {
+                        p.lower + (p.upper - p.lower) * k as f64 / (n - 1) as f64
+                    }
+                })
+                .collect();
+            (i, pts)
+        })
+        .collect();
+    let mut start = c.initial();
+    if !grid_axes.is_empty() {
+        let mut best: Option<(f64, Vec<f64>)> = None;
+        let mut combo = vec![0usize; grid_axes.len()];
+        loop {
+            let mut fixed: Vec<Option<f64>> = vec![None; c.params.len()];
+            for (a, (i, pts)) in grid_axes.iter().enumerate() {
+                fixed[*i] = Some(pts[combo[a]]);
+            }
+            let problem = CandidateProblem {
+                target,
+                base,
+                candidate: &c,
+                fixed: fixed.clone(),
+            };
+            let free_idx: Vec<usize> = (0..c.params.len())
+                .filter(|i| fixed[*i].is_none())
+                .collect();
+            let x0: Vec<f64> = free_idx.iter().map(|&i| c.params[i].initial).collect();
+            let result = if free_idx.is_empty() {
+                let mut out = vec![0.0; problem.n_residuals()];
+                problem
+                    .residuals(&[], &mut out)
+                    .map(|()| (0.5 * out.iter().map(|r| r * r).sum::<f64>(), Vec::new()))
+            } else {
+                let b: Vec<(f64, f64)> = free_idx.iter().map(|&i| bounds[i]).collect();
+                let s: Vec<f64> = free_idx.iter().map(|&i| scales[i]).collect();
+                let mut quick = fit_opts.clone();
+                quick.max_iterations = quick.max_iterations.min(15);
+                fit(&problem, &x0, &b, &s, &quick, cancel).map(|r| (r.cost_after, r.params))
+            };
+            if let Ok((cost, free)) = result
+                && cost.is_finite()
+                && best.as_ref().is_none_or(|(b, _)| cost < *b)
+            {
+                best = Some((cost, problem.full(&free)));
+            }
+            // Next combination.
+            let mut a = 0;
+            loop {
+                if a == combo.len() {
+                    break;
+                }
+                combo[a] += 1;
+                if combo[a] < grid_axes[a].1.len() {
+                    break;
+                }
+                combo[a] = 0;
+                a += 1;
+            }
+            if a == combo.len() || cancel.is_some_and(Cancel::is_cancelled) {
+                break;
+            }
+        }
+        match best {
+            Some((_, x)) => start = x,
+            None => return failed("no grid start could be simulated".to_string()),
+        }
+    }
+    let problem = CandidateProblem {
+        target,
+        base,
+        candidate: &c,
+        fixed: vec![None; c.params.len()],
+    };
+    match fit(&problem, &start, &bounds, &scales, &fit_opts, cancel) {
+        Ok(report) => {
+            let mut weighted = vec![0.0; problem.n_residuals()];
+            if let Err(e) = problem.residuals(&report.params, &mut weighted) {
+                return failed(e.to_string());
+            }
+            Fitted {
+                candidate: c.clone(),
+                values: report.params.clone(),
+                cost: report.cost_after,
+                report: Some(report),
+                weighted,
+                error: None,
+            }
+        }
+        Err(e) => failed(e.to_string()),
+    }
+}
+
+fn score(cost_before: f64, cost: f64, k: usize, n_eff: f64) -> f64 {
+    if !(cost.is_finite() && cost > 0.0 && cost_before > 0.0) {
+        return if cost == 0.0 && cost_before > 0.0 {
+            f64::INFINITY
+        } else {
+            f64::NEG_INFINITY
+        };
+    }
+    n_eff * (cost_before / cost).ln() - k as f64 * n_eff.max(1.0).ln()
+}
+
+fn ranked(target: &Target, f: &Fitted, cost_before: f64, n_eff: f64, n: usize) -> RankedCandidate {
+    let scale_se = (n as f64 / n_eff.max(1.0)).sqrt();
+    let params = f
+        .candidate
+        .params
+        .iter()
+        .zip(&f.values)
+        .enumerate()
+        .map(|(i, (p, v))| FittedParam {
+            name: p.name.clone(),
+            unit: p.unit.clone(),
+            value: *v,
+            std_error: f.report.as_ref().map_or(f64::INFINITY, |r| {
+                r.std_errors.get(i).copied().unwrap_or(f64::INFINITY) * scale_se
+            }),
+        })
+        .collect();
+    RankedCandidate {
+        candidate: f.candidate.clone(),
+        params,
+        rms_after: if f.weighted.is_empty() {
+            vec![f64::NAN; 0]
+        } else {
+            target.rms_per_output(&f.weighted)
+        },
+        cost: f.cost,
+        score: if f.error.is_some() {
+            f64::NEG_INFINITY
+        } else {
+            score(cost_before, f.cost, f.candidate.params.len(), n_eff)
+        },
+        termination: f
+            .report
+            .as_ref()
+            .map_or(Termination::Stalled, |r| r.termination),
+        qualitative: None,
+        error: f.error.clone(),
+    }
+}
+
+/// Explains what the model is missing on this recording.
+///
+/// # Errors
+/// [`CoreError::InvalidArgument`] for bad options or a recording that shares
+/// no output with the model; the model's errors if even the model as given
+/// cannot be simulated. A candidate whose fit fails is ranked last with its
+/// error, not returned as an error.
+///
+/// # Example
+/// See the `modelgap` facade crate and `tests/measurement_loop.rs`.
+pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Result<Explanation> {
+    if !(opts.floor_factor.is_finite() && opts.floor_factor >= 1.0) {
+        return Err(CoreError::InvalidArgument {
+            name: "floor_factor",
+            reason: format!("must be at least 1, found {}", opts.floor_factor),
+        });
+    }
+    let names = shared_outputs(model, rec)?;
+    let measured: Vec<&[f64]> = names.iter().map(|n| rec.values(n)).collect::<Result<_>>()?;
+    let sigma: Vec<f64> = names
+        .iter()
+        .zip(&measured)
+        .map(|(n, m)| noise_floor(n, m, &opts.noise).0)
+        .collect();
+    let target = Target {
+        model,
+        rec,
+        names: names.clone(),
+        measured,
+        sigma,
+    };
+    let n = target.n_residuals();
+    let mut base_weighted = vec![0.0; n];
+    target.residuals(&[], &mut base_weighted)?;
+    let cost_before = 0.5 * base_weighted.iter().map(|r| r * r).sum::<f64>();
+    let rms_before = target.rms_per_output(&base_weighted);
+
+    // Fit every candidate, in parallel.
+    let candidates: Vec<Candidate> = model
+        .candidates()
+        .into_iter()
+        .filter(|c| opts.only.is_empty() || opts.only.iter().any(|o| o == &c.id))
+        .collect();
+    let total = candidates.len();
+    let done = AtomicUsize::new(0);
+    let fitted: Vec<Fitted> = candidates
+        .par_iter()
+        .map(|c| {
+            let f = fit_candidate(&target, &[], c, opts);
+            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+            if let Some(p) = &opts.progress {
+                p(d, total);
+            }
+            f
+        })
+        .collect();
+    // Effective sample size from the best fit's residual (or the model's own
+    // residual when nothing fits better): what noise alone looks like.
+    let best_fit = fitted
+        .iter()
+        .filter(|f| f.error.is_none())
+        .min_by(|a, b| a.cost.total_cmp(&b.cost));
+    let n_eff = match best_fit {
+        Some(f) if f.cost < cost_before => target.n_eff(&f.weighted),
+        _ => target.n_eff(&base_weighted),
+    };
+    let mut ranking: Vec<RankedCandidate> = fitted
+        .iter()
+        .map(|f| ranked(&target, f, cost_before, n_eff, n))
+        .collect();
+    ranking.sort_by(|a, b| b.score.total_cmp(&a.score));
+    let margin = match (ranking.first(), ranking.get(1)) {
+        (Some(a), Some(b)) if b.score.is_finite() => a.score - b.score,
+        (Some(a), _) => a.score,
+        _ => 0.0,
+    };
+    let mut warnings = Vec::new();
+    for r in ranking.iter().filter(|r| r.error.is_some()) {
+        warnings.push(format!(
+            "{}: fit failed: {}",
+            r.candidate.name,
+            r.error.as_deref().unwrap_or("")
+        ));
+    }
+    let floor_ok = |rms: &[f64]| {
+        rms.iter()
+            .zip(&target.sigma)
+            .all(|(r, s)| *r <= opts.floor_factor * s)
+    };
+
+    let mut chosen: Vec<RankedCandidate> = Vec::new();
+    let mut verdict = Verdict::NothingMissing;
+    let mut after_weighted = base_weighted.clone();
+    if let Some(best) = ranking
+        .first()
+        .filter(|b| b.score > opts.significance && b.error.is_none())
+    {
+        chosen.push(best.clone());
+        verdict = Verdict::EffectFound;
+        if let Some(f) = fitted.iter().find(|f| f.candidate.id == best.candidate.id) {
+            after_weighted = f.weighted.clone();
+        }
+        if !floor_ok(&best.rms_after) && opts.max_effects >= 2 {
+            // A second effect on top of the first: fit each other candidate with
+            // the first's parameters free too (a joint fit, started from the first's).
+            let first = best.effect();
+            let others: Vec<&Candidate> = candidates
+                .iter()
+                .filter(|c| c.id != first.candidate.id)
+                .collect();
+            let first_c = prepared(&first.candidate, rec);
+            let pairs: Vec<(Fitted, Fitted)> = others
+                .par_iter()
+                .map(|c| {
+                    // Start the second from its best fit on top of the first
+                    // (grid starts included), then fit both jointly.
+                    let second = fit_candidate(&target, std::slice::from_ref(&first), c, opts);
+                    if second.error.is_some() {
+                        return (failed_clone(&second), second);
+                    }
+                    let start: Vec<f64> =
+                        first.values.iter().chain(&second.values).copied().collect();
+                    match fit_pair(&target, &first_c, &second.candidate, &start, opts) {
+                        Ok((report, weighted)) => {
+                            let (a, b) = report.params.split_at(first_c.params.len());
+                            let mut first_report = report.clone();
+                            first_report.params = a.to_vec();
+                            first_report.std_errors = report.std_errors[..a.len()].to_vec();
+                            let mut second_report = report.clone();
+                            second_report.params = b.to_vec();
+                            second_report.std_errors = report.std_errors[a.len()..].to_vec();
+                            let f1 = Fitted {
+                                candidate: first_c.clone(),
+                                values: a.to_vec(),
+                                report: Some(first_report),
+                                cost: report.cost_after,
+                                weighted: weighted.clone(),
+                                error: None,
+                            };
+                            let f2 = Fitted {
+                                candidate: second.candidate.clone(),
+                                values: b.to_vec(),
+                                report: Some(second_report),
+                                cost: report.cost_after,
+                                weighted,
+                                error: None,
+                            };
+                            (f1, f2)
+                        }
+                        Err(e) => {
+                            let mut f = failed_clone(&second);
+                            f.error = Some(e.to_string());
+                            (f, second)
+                        }
+                    }
+                })
+                .collect();
+            let best_pair = pairs
+                .iter()
+                .filter(|(a, b)| a.error.is_none() && b.error.is_none())
+                .min_by(|a, b| a.0.cost.total_cmp(&b.0.cost));
+            if let Some((joint_first, second)) = best_pair {
+                let n_eff2 = target.n_eff(&joint_first.weighted);
+                let k2 = second.candidate.params.len();
+                let gain = score(best.cost, joint_first.cost, k2, n_eff2);
+                if gain > opts.significance {
+                    let mut first_ranked = ranked(&target, joint_first, cost_before, n_eff2, n);
+                    first_ranked.candidate = best.candidate.clone();
+                    let mut second_ranked = ranked(&target, second, cost_before, n_eff2, n);
+                    second_ranked.score = gain;
+                    chosen = vec![first_ranked, second_ranked];
+                    verdict = Verdict::TwoEffects;
+                    after_weighted = joint_first.weighted.clone();
+                }
+            }
+        }
+        let rms_after = target.rms_per_output(&after_weighted);
+        if !floor_ok(&rms_after) {
+            verdict = Verdict::Partial;
+        }
+    }
+    // Qualitative evidence for the top of the ranking (it costs a diagnosis each).
+    for r in ranking.iter_mut().take(5) {
+        r.qualitative = model.qualitative_agreement(rec, &r.candidate);
+    }
+    let t = rec.t();
+    let dt = if t.len() > 1 {
+        (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64
+    } else {
+        0.0
+    };
+    let rms_after = target.rms_per_output(&after_weighted);
+    let outputs = names
+        .iter()
+        .enumerate()
+        .map(|(j, name)| {
+            let nr = rec.len();
+            let resid: Vec<f64> = after_weighted[j * nr..(j + 1) * nr]
+                .iter()
+                .map(|r| r * target.sigma[j])
+                .collect();
+            OutputSummary {
+                name: name.clone(),
+                unit: model.unit(name),
+                noise_floor: target.sigma[j],
+                rms_before: rms_before[j],
+                rms_after: rms_after[j],
+                remaining_windows: failure_windows(t, &resid, 4.0 * target.sigma[j], 5.0 * dt),
+            }
+        })
+        .collect();
+    Ok(Explanation {
+        model: model.name(),
+        verdict,
+        outputs,
+        ranked: ranking,
+        chosen,
+        margin,
+        effective_samples: n_eff,
+        cost_before,
+        warnings,
+    })
+}
+
+fn failed_clone(f: &Fitted) -> Fitted {
+    Fitted {
+        candidate: f.candidate.clone(),
+        values: f.values.clone(),
+        report: None,
+        cost: f64::INFINITY,
+        weighted: Vec::new(),
+        error: f.error.clone(),
+    }
+}
+
+/// Compare options matching explain options (same noise floors).
+pub fn compare_options(opts: &ExplainOptions) -> CompareOptions {
+    CompareOptions {
+        noise: opts.noise.clone(),
+        ..CompareOptions::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::effect::{EffectKind, EffectParam};
+    use crate::model::Prediction;
+    use crate::recording::Signal;
+
+    /// y = A sin(2π t) with candidate effects: an offset, a drift, a change of A.
+    struct Toy;
+
+    fn param(name: &str, scale: f64) -> EffectParam {
+        EffectParam {
+            name: name.into(),
+            unit: "1".into(),
+            initial: 0.0,
+            lower: -10.0,
+            upper: 10.0,
+            scale,
+            grid: 0,
+        }
+    }
+
+    impl Model for Toy {
+        fn name(&self) -> String {
+            "toy".into()
+        }
+        fn outputs(&self) -> Vec<String> {
+            vec!["y".into()]
+        }
+        fn predict_with(
+            &self,
+            rec: &Recording,
+            effects: &[(&Candidate, &[f64])],
+        ) -> Result<Prediction> {
+            let y = rec
+                .t()
+                .iter()
+                .map(|&t| {
+                    let mut a = 1.0;
+                    let mut y = 0.0;
+                    for (c, v) in effects {
+                        match c.id.as_str() {
+                            "offset" => y += v[0],
+                            "drift" => y += v[0] * t,
+                            "amplitude" => a += v[0],
+                            _ => {}
+                        }
+                    }
+                    y + a * (2.0 * std::f64::consts::PI * t).sin()
+                })
+                .collect();
+            Ok(Prediction {
+                names: vec!["y".into()],
+                values: vec![y],
+            })
+        }
+        fn candidates(&self) -> Vec<Candidate> {
+            ["offset", "drift", "amplitude"]
+                .iter()
+                .map(|id| Candidate {
+                    id: id.to_string(),
+                    name: format!("{id} effect"),
+                    kind: EffectKind::MissingElement,
+                    acts_on: "y".into(),
+                    params: vec![param("v", 0.1)],
+                })
+                .collect()
+        }
+        fn with_effects(&self, _effects: &[Effect]) -> Result<Box<dyn Model>> {
+            Ok(Box::new(Toy))
+        }
+    }
+
+    /// Deterministic Gaussian noise (splitmix64 + Box–Muller), AR(1) with coefficient `rho`.
+    fn noise(n: usize, sigma: f64, rho: f64, seed: u64) -> Vec<f64> {
+        let mut s = seed;
+        let mut next = || {
+            s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = s;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut out = Vec::with_capacity(n);
+        let mut prev = 0.0;
+        for _ in 0..n {
+            let (u1, u2) = (next().max(1e-300), next());
+            let g = (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos();
+            prev = rho * prev + (1.0 - rho * rho).sqrt() * g;
+            out.push(sigma * prev);
+        }
+        out
+    }
+
+    fn recording(extra: impl Fn(f64) -> f64, sigma: f64, rho: f64, seed: u64) -> Recording {
+        let t: Vec<f64> = (0..2000).map(|k| k as f64 * 1e-3).collect();
+        let e = noise(t.len(), sigma, rho, seed);
+        let y = t
+            .iter()
+            .zip(&e)
+            .map(|(&t, e)| (2.0 * std::f64::consts::PI * t).sin() + extra(t) + e)
+            .collect();
+        Recording::new(t, vec![Signal::new("y", y)]).unwrap()
+    }
+
+    #[test]
+    fn hidden_offset_is_found_with_its_value() {
+        let rec = recording(|_| 0.3, 0.01, 0.0, 1);
+        let ex = explain(&Toy, &rec, &ExplainOptions::default()).unwrap();
+        assert_eq!(ex.verdict, Verdict::EffectFound);
+        assert_eq!(ex.chosen[0].candidate.id, "offset");
+        assert!((ex.chosen[0].params[0].value - 0.3).abs() < 0.015);
+        assert!(ex.outputs[0].rms_after < 1.3 * ex.outputs[0].noise_floor);
+    }
+
+    #[test]
+    fn right_model_gets_nothing_missing_with_white_noise() {
+        for seed in 1..6 {
+            let rec = recording(|_| 0.0, 0.01, 0.0, seed);
+            let ex = explain(&Toy, &rec, &ExplainOptions::default()).unwrap();
+            assert_eq!(
+                ex.verdict,
+                Verdict::NothingMissing,
+                "seed {seed}: {:?}",
+                ex.ranked[0].score
+            );
+        }
+    }
+
+    #[test]
+    fn right_model_gets_nothing_missing_with_coloured_noise() {
+        // AR(1) noise with ρ = 0.95: slow wander that an offset or drift could
+        // "fit" — a plain BIC on 2000 samples would call that an effect.
+        let floor = ExplainOptions {
+            noise: [("y".to_string(), 0.01)].into(),
+            ..ExplainOptions::default()
+        };
+        for seed in 1..6 {
+            let rec = recording(|_| 0.0, 0.01, 0.95, seed);
+            let ex = explain(&Toy, &rec, &floor).unwrap();
+            assert_eq!(
+                ex.verdict,
+                Verdict::NothingMissing,
+                "seed {seed}: best score {}",
+                ex.ranked[0].score
+            );
+            // With the floor estimated from the data (which sees only the
+            // noise's fast part) the verdict must not change.
+            let ex = explain(&Toy, &rec, &ExplainOptions::default()).unwrap();
+            assert_eq!(
+                ex.verdict,
+                Verdict::NothingMissing,
+                "seed {seed}, estimated floor: best score {}",
+                ex.ranked[0].score
+            );
+        }
+    }
+
+    #[test]
+    fn two_effects_are_both_found() {
+        let rec = recording(|t| 0.2 + 0.5 * t, 0.01, 0.0, 3);
+        let ex = explain(&Toy, &rec, &ExplainOptions::default()).unwrap();
+        assert_eq!(ex.verdict, Verdict::TwoEffects);
+        let mut ids: Vec<&str> = ex.chosen.iter().map(|c| c.candidate.id.as_str()).collect();
+        ids.sort_unstable();
+        assert_eq!(ids, ["drift", "offset"]);
+    }
+
+    #[test]
+    fn effect_off_the_menu_is_a_partial_explanation() {
+        let rec = recording(|t| 0.8 * (t - 1.0).powi(2), 0.01, 0.0, 4);
+        let ex = explain(
+            &Toy,
+            &rec,
+            &ExplainOptions {
+                max_effects: 1,
+                ..ExplainOptions::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(ex.verdict, Verdict::Partial);
+        assert!(!ex.outputs[0].remaining_windows.is_empty());
+    }
+}

@@ -1,0 +1,92 @@
+//! The seam between the measurement loop and a simulator: a [`Model`]
+//! predicts a recording's measured outputs from its inputs, and offers the
+//! [`Candidate`] effects it could be missing.
+
+use crate::effect::{Candidate, Effect};
+use crate::error::Result;
+use crate::recording::Recording;
+
+/// A model's prediction of a recording's measured outputs, at the recording's times.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Prediction {
+    /// Output names, as in recordings.
+    pub names: Vec<String>,
+    /// One series per output, one value per sample of the recording.
+    pub values: Vec<Vec<f64>>,
+}
+
+impl Prediction {
+    /// The series of an output, by name.
+    pub fn get(&self, name: &str) -> Option<&[f64]> {
+        self.names
+            .iter()
+            .position(|n| n == name)
+            .map(|i| self.values[i].as_slice())
+    }
+}
+
+/// A physical model that can be held against a recording.
+///
+/// Implemented by the bond-graph crate (a model file or a built-in) and the
+/// cloth crate (a scene). Everything the loop needs goes through here, so the
+/// loop ([`crate::explain`]) knows nothing of bonds or particles.
+pub trait Model: Send + Sync {
+    /// A short name for reports (`dc-motor`).
+    fn name(&self) -> String;
+
+    /// The measured outputs the model predicts, by recording name.
+    fn outputs(&self) -> Vec<String>;
+
+    /// The unit of an output (`A`, `rad/s`), for plots and reports.
+    fn unit(&self, output: &str) -> String {
+        let _ = output;
+        String::new()
+    }
+
+    /// Predicts the outputs at the recording's times, driven by the
+    /// recording's inputs (those the model takes and the recording holds).
+    ///
+    /// # Errors
+    /// [`crate::CoreError::Model`] when the model cannot simulate the recording.
+    fn predict(&self, rec: &Recording) -> Result<Prediction> {
+        self.predict_with(rec, &[])
+    }
+
+    /// Predicts with candidate effects applied at the given parameter values:
+    /// the inner loop of every fit, so it should be fast.
+    ///
+    /// # Errors
+    /// [`crate::CoreError::Model`] when the model cannot simulate the recording
+    /// with these effects (e.g. a parameter value that makes it stiff or singular).
+    fn predict_with(&self, rec: &Recording, effects: &[(&Candidate, &[f64])])
+    -> Result<Prediction>;
+
+    /// The effects the model could be missing, each with its parameters,
+    /// units, initial values and bounds.
+    fn candidates(&self) -> Vec<Candidate>;
+
+    /// A new model with the effects built in.
+    ///
+    /// # Errors
+    /// [`crate::CoreError::Model`] when an effect does not fit the model.
+    fn with_effects(&self, effects: &[Effect]) -> Result<Box<dyn Model>>;
+
+    /// The model as the text of its file format (a bond-graph TOML), if it is
+    /// file-based; after [`Model::with_effects`] it holds the new elements.
+    fn to_file_text(&self) -> Option<String> {
+        None
+    }
+
+    /// The file extension of [`Model::to_file_text`] (`toml`).
+    fn file_extension(&self) -> &'static str {
+        "txt"
+    }
+
+    /// Whether a candidate's qualitative signature (fault tree, temporal
+    /// signature) agrees with the residuals the model leaves on `rec`;
+    /// `None` when the model has no qualitative reasoning for it.
+    fn qualitative_agreement(&self, rec: &Recording, candidate: &Candidate) -> Option<bool> {
+        let _ = (rec, candidate);
+        None
+    }
+}

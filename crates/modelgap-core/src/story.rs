@@ -1,0 +1,349 @@
+//! The loop's story for people: where the model fails, what is missing,
+//! the error before and after — as terminal text and as the HTML report.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use crate::compare::Comparison;
+use crate::error::Result;
+use crate::explain::{Explanation, Verdict};
+use crate::report::{
+    ComparisonChannels, RankingBar, Report, ResidualPlot, SeriesPlot, format_number,
+    write_comparison_mcap, write_html,
+};
+
+fn num(v: f64) -> String {
+    format_number(v)
+}
+
+/// The verdict as one sentence.
+pub fn verdict_sentence(ex: &Explanation) -> String {
+    let names = |i: usize| {
+        ex.chosen
+            .get(i)
+            .map_or(String::new(), |c| c.candidate.name.clone())
+    };
+    match ex.verdict {
+        Verdict::NothingMissing => {
+            "Nothing is missing: the model already leaves only what noise leaves.".to_string()
+        }
+        Verdict::EffectFound => format!("Missing: {}.", names(0)),
+        Verdict::TwoEffects => format!("Missing: {}, and {}.", names(0), names(1)),
+        Verdict::Partial => format!(
+            "Partly explained: {} removes part of the error, but what remains is above the noise floor — the true effect is probably not on the menu.",
+            if ex.chosen.is_empty() {
+                "no candidate".to_string()
+            } else {
+                names(0)
+            }
+        ),
+    }
+}
+
+/// Where the model fails, output by output, as text.
+pub fn comparison_text(c: &Comparison) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "model {} against the recording ({} samples, {} s):",
+        c.model,
+        c.t.len(),
+        num(c.t.last().copied().unwrap_or(0.0) - c.t.first().copied().unwrap_or(0.0))
+    );
+    for o in &c.outputs {
+        let _ = writeln!(
+            s,
+            "  {:<8} RMS {} {} ({:.1}× the noise floor {}), max {}, normalised RMS {:.2} %",
+            o.name,
+            num(o.stats.rms),
+            o.unit,
+            o.rms_over_floor(),
+            num(o.noise_floor),
+            num(o.stats.max_abs),
+            100.0 * o.stats.nrms
+        );
+        if o.windows.is_empty() {
+            let _ = writeln!(
+                s,
+                "           never leaves its band of ±{} {}",
+                num(o.band),
+                o.unit
+            );
+        } else {
+            let shown: Vec<String> = o
+                .windows
+                .iter()
+                .take(6)
+                .map(|w| {
+                    format!(
+                        "{}–{} s (peak {} at {} s)",
+                        num(w.start),
+                        num(w.end),
+                        num(w.peak),
+                        num(w.peak_time)
+                    )
+                })
+                .collect();
+            let more = if o.windows.len() > 6 {
+                format!(" and {} more", o.windows.len() - 6)
+            } else {
+                String::new()
+            };
+            let _ = writeln!(
+                s,
+                "           fails (outside ±{} {}) at {}{more}",
+                num(o.band),
+                o.unit,
+                shown.join(", ")
+            );
+        }
+    }
+    s
+}
+
+/// The ranking and the verdict as text.
+pub fn explanation_text(ex: &Explanation, top: usize) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "candidate effects, best first (score = evidence, a BIC difference with {} effective samples):",
+        num(ex.effective_samples)
+    );
+    for (i, r) in ex.ranked.iter().take(top).enumerate() {
+        let params: Vec<String> = r
+            .params
+            .iter()
+            .map(|p| {
+                if p.std_error.is_finite() {
+                    format!(
+                        "{} = {} ± {} {}",
+                        p.name,
+                        num(p.value),
+                        num(p.std_error),
+                        p.unit
+                    )
+                } else {
+                    format!("{} = {} {}", p.name, num(p.value), p.unit)
+                }
+            })
+            .collect();
+        let rms: Vec<String> = ex
+            .outputs
+            .iter()
+            .zip(&r.rms_after)
+            .map(|(o, v)| format!("{} {}→{}", o.name, num(o.rms_before), num(*v)))
+            .collect();
+        let qual = match r.qualitative {
+            Some(true) => "  [signature agrees]",
+            Some(false) => "  [signature disagrees]",
+            None => "",
+        };
+        let _ = writeln!(
+            s,
+            "  {:>2}. {:<48} score {:>9}  {}  RMS {}{qual}",
+            i + 1,
+            r.candidate.name,
+            num(r.score),
+            params.join(", "),
+            rms.join(", ")
+        );
+        if let Some(e) = &r.error {
+            let _ = writeln!(s, "      fit failed: {e}");
+        }
+    }
+    let _ = writeln!(s, "margin to the runner-up: {}", num(ex.margin));
+    let _ = writeln!(s, "\nverdict: {}", verdict_sentence(ex));
+    for o in &ex.outputs {
+        let _ = writeln!(
+            s,
+            "  {:<8} RMS {} → {} {} (noise floor {}, {:.2}× the floor after)",
+            o.name,
+            num(o.rms_before),
+            num(o.rms_after),
+            o.unit,
+            num(o.noise_floor),
+            o.rms_after / o.noise_floor
+        );
+        if ex.verdict == Verdict::Partial && !o.remaining_windows.is_empty() {
+            let w: Vec<String> = o
+                .remaining_windows
+                .iter()
+                .take(5)
+                .map(|w| format!("{}–{} s", num(w.start), num(w.end)))
+                .collect();
+            let _ = writeln!(s, "           still fails at {}", w.join(", "));
+        }
+    }
+    for w in &ex.warnings {
+        let _ = writeln!(s, "warning: {w}");
+    }
+    s
+}
+
+/// The HTML report of a comparison, with the explanation and the comparison
+/// after the chosen effects when there is one.
+pub fn build_report(
+    before: &Comparison,
+    explanation: Option<&Explanation>,
+    after: Option<&Comparison>,
+) -> Report {
+    let mut summary = Vec::new();
+    for o in &before.outputs {
+        summary.push(format!(
+            "{}: the model as given leaves an RMS error of {} {} ({:.1}× the noise floor of {} {}){}.",
+            o.name,
+            num(o.stats.rms),
+            o.unit,
+            o.rms_over_floor(),
+            num(o.noise_floor),
+            o.unit,
+            if o.windows.is_empty() { ", and never leaves its band".to_string() } else { format!(", and leaves its band in {} window(s)", o.windows.len()) }
+        ));
+    }
+    let verdict = explanation.map_or_else(
+        || "Comparison only: run explain to find what is missing.".to_string(),
+        verdict_sentence,
+    );
+    let mut table = vec![vec![
+        "output".to_string(),
+        "noise floor".to_string(),
+        "RMS before".to_string(),
+        "RMS after".to_string(),
+        "after / floor".to_string(),
+    ]];
+    for o in &before.outputs {
+        let after_rms = after.and_then(|a| a.output(&o.name)).map(|a| a.stats.rms);
+        table.push(vec![
+            format!("{} ({})", o.name, o.unit),
+            num(o.noise_floor),
+            num(o.stats.rms),
+            after_rms.map_or("—".to_string(), num),
+            after_rms.map_or("—".to_string(), |r| format!("{:.2}", r / o.noise_floor)),
+        ]);
+    }
+    if let Some(ex) = explanation {
+        for c in &ex.chosen {
+            let params: Vec<String> = c
+                .params
+                .iter()
+                .map(|p| {
+                    if p.std_error.is_finite() {
+                        format!(
+                            "{} = {} ± {} {}",
+                            p.name,
+                            num(p.value),
+                            num(p.std_error),
+                            p.unit
+                        )
+                    } else {
+                        format!("{} = {} {}", p.name, num(p.value), p.unit)
+                    }
+                })
+                .collect();
+            summary.push(format!(
+                "Chosen effect: {} (acts on {}), {}.",
+                c.candidate.name,
+                c.candidate.acts_on,
+                params.join(", ")
+            ));
+        }
+    }
+    let series = before
+        .outputs
+        .iter()
+        .map(|o| SeriesPlot {
+            title: o.name.clone(),
+            unit: o.unit.clone(),
+            t: before.t.clone(),
+            measured: o.measured.clone(),
+            before: o.predicted.clone(),
+            after: after
+                .and_then(|a| a.output(&o.name))
+                .map(|a| a.predicted.clone()),
+        })
+        .collect();
+    let residuals = before
+        .outputs
+        .iter()
+        .map(|o| ResidualPlot {
+            title: format!("residual of {}", o.name),
+            unit: o.unit.clone(),
+            t: before.t.clone(),
+            before: o.residual.clone(),
+            after: after
+                .and_then(|a| a.output(&o.name))
+                .map(|a| a.residual.clone()),
+            band: o.band,
+            windows: o.windows.clone(),
+        })
+        .collect();
+    let ranking = explanation.map_or_else(Vec::new, |ex| {
+        let chosen: Vec<&str> = ex.chosen.iter().map(|c| c.candidate.id.as_str()).collect();
+        ex.ranked
+            .iter()
+            .take(12)
+            .filter(|r| r.score.is_finite())
+            .map(|r| RankingBar {
+                label: r.candidate.name.clone(),
+                value: r.score,
+                highlight: chosen.contains(&r.candidate.id.as_str()),
+                note: r
+                    .params
+                    .iter()
+                    .map(|p| format!("{} = {} {}", p.name, num(p.value), p.unit))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            })
+            .collect()
+    });
+    Report {
+        title: format!("modelgap: {} against the recording", before.model),
+        summary_html_paragraphs: summary,
+        verdict,
+        table,
+        series,
+        residuals,
+        ranking,
+        ranking_unit: "evidence (BIC difference)".to_string(),
+        extra_svgs: Vec::new(),
+    }
+}
+
+/// Writes `report.html` and `comparison.mcap` (measured, model before and
+/// after, residuals, for Foxglove) into `dir` (created if needed).
+///
+/// # Errors
+/// I/O errors with the path; invalid report data.
+pub fn write_report_dir(
+    dir: &Path,
+    report: &Report,
+    before: &Comparison,
+    after: Option<&Comparison>,
+) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| crate::CoreError::io(e, Some(dir)))?;
+    write_html(report, &dir.join("report.html"))?;
+    let names: Vec<String> = before.outputs.iter().map(|o| o.name.clone()).collect();
+    let measured: Vec<Vec<f64>> = before.outputs.iter().map(|o| o.measured.clone()).collect();
+    let predicted: Vec<Vec<f64>> = before.outputs.iter().map(|o| o.predicted.clone()).collect();
+    let after_pred: Option<Vec<Vec<f64>>> = after.map(|a| {
+        before
+            .outputs
+            .iter()
+            .map(|o| {
+                a.output(&o.name)
+                    .map_or_else(|| o.predicted.clone(), |x| x.predicted.clone())
+            })
+            .collect()
+    });
+    // MCAP log times cannot be negative: shift so the first sample is at 0.
+    let t0 = before.t.first().copied().unwrap_or(0.0);
+    let t: Vec<f64> = before.t.iter().map(|x| x - t0).collect();
+    let channels = ComparisonChannels {
+        t: &t,
+        names: &names,
+        measured: &measured,
+        before: &predicted,
+        after: after_pred.as_deref(),
+    };
+    write_comparison_mcap(&channels, &dir.join("comparison.mcap"))
+}
