@@ -149,6 +149,17 @@ pub enum BondError {
         /// What is wrong.
         detail: String,
     },
+    /// A candidate effect cannot be applied: it is unknown to this model, or
+    /// a parameter value is missing, not finite or outside its bounds.
+    #[error("effect '{candidate}': {detail}")]
+    BadEffect {
+        /// The candidate's id (`coulomb@1m`).
+        candidate: String,
+        /// The parameter concerned; empty when it is the candidate as a whole.
+        param: String,
+        /// What is wrong, naming the parameter.
+        detail: String,
+    },
     /// A model file could not be read.
     #[error("{message} at line {line}, column {column}{}", path_suffix(path))]
     File {

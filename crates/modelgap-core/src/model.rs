@@ -29,7 +29,7 @@ impl Prediction {
 ///
 /// Implemented by the bond-graph crate (a model file or a built-in) and the
 /// cloth crate (a scene). Everything the loop needs goes through here, so the
-/// loop ([`crate::explain`]) knows nothing of bonds or particles.
+/// loop ([`crate::explain()`]) knows nothing of bonds or particles.
 pub trait Model: Send + Sync {
     /// A short name for reports (`dc-motor`).
     fn name(&self) -> String;
