@@ -1,0 +1,158 @@
+//! The model's own scales: effort and flow levels of each junction over a
+//! start-up from rest, peak states, the slowest mode.
+
+use std::collections::BTreeMap;
+
+use crate::compiled::CompiledModel;
+use crate::element::ElementKind;
+use crate::expr::Var;
+use crate::graph::{BondGraph, ElementId};
+use crate::simulate::{Inputs, SimOptions, simulate_compiled, time_grid};
+use crate::state_space::StateSpace;
+
+/// Typical and peak magnitude of a quantity over a start-up.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Level {
+    pub(super) typical: f64,
+    pub(super) peak: f64,
+}
+
+impl Level {
+    /// A strength's scale: the typical value within [1e-3, 1e-1] of the peak.
+    pub(super) fn strength(self) -> f64 {
+        positive_or(
+            if self.peak > 0.0 {
+                self.typical.clamp(1e-3 * self.peak, 0.1 * self.peak)
+            } else {
+                self.typical
+            },
+            1.0,
+        )
+    }
+
+    /// A flow's scale: the typical value within [1e-3, 1] of the peak.
+    pub(super) fn flow(self) -> f64 {
+        positive_or(
+            if self.peak > 0.0 {
+                self.typical.clamp(1e-3 * self.peak, self.peak)
+            } else {
+                self.typical
+            },
+            1.0,
+        )
+    }
+
+    /// The peak, or `fallback` when there is none.
+    pub(super) fn peak_or(self, fallback: f64) -> f64 {
+        positive_or(self.peak.max(self.typical), fallback)
+    }
+}
+
+fn positive_or(x: f64, fallback: f64) -> f64 {
+    if x.is_finite() && x > 0.0 {
+        x
+    } else {
+        fallback
+    }
+}
+
+/// The model's own scales: per 1-junction effort and flow levels, per storage
+/// element the peak state, and the slowest mode's rate.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Scales {
+    effort: BTreeMap<ElementId, Level>,
+    flow: BTreeMap<ElementId, Level>,
+    pub(super) state_peak: BTreeMap<ElementId, f64>,
+    pub(super) slowest_rate: Option<f64>,
+}
+
+impl Scales {
+    pub(super) fn of(g: &BondGraph) -> Scales {
+        let mut s = Scales::default();
+        let Ok(model) = CompiledModel::new(g) else {
+            return s;
+        };
+        let u = model.input_defaults.clone();
+        let ss = StateSpace::of_compiled(&model, None, Some(&u));
+        let slowest = ss
+            .modes()
+            .into_iter()
+            .find(|m| m.time_constant.is_finite() && m.time_constant > 0.0);
+        s.slowest_rate = slowest.map(|m| m.eigenvalue.norm()).filter(|r| *r > 0.0);
+        let horizon = slowest.map_or(1.0, |m| (5.0 * m.time_constant).clamp(1e-3, 1e3));
+        let t = time_grid(horizon, 400.0 / horizon);
+        let run = simulate_compiled(&model, &Inputs::new(), &t, &SimOptions::default()).ok();
+        let steady = model.steady_state(&u, None).ok().or_else(|| {
+            run.as_ref()
+                .map(|r| r.states.iter().map(|v| *v.last().unwrap_or(&0.0)).collect())
+        });
+        let junctions: Vec<ElementId> = g
+            .element_ids()
+            .filter(|&id| g.element(id).kind.is_junction())
+            .collect();
+        let level = |vars: &BTreeMap<Var, f64>, j: ElementId, flow: bool| -> f64 {
+            g.ports(j)
+                .iter()
+                .map(|(b, _)| {
+                    let v = if flow {
+                        Var::F(b.number())
+                    } else {
+                        Var::E(b.number())
+                    };
+                    vars.get(&v).copied().unwrap_or(0.0).abs()
+                })
+                .filter(|v| v.is_finite())
+                .fold(0.0, f64::max)
+        };
+        if let Some(x) = &steady {
+            let vars = model.variable_values(0.0, x, &u);
+            for &j in &junctions {
+                s.effort.entry(j).or_default().typical = level(&vars, j, false);
+                s.flow.entry(j).or_default().typical = level(&vars, j, true);
+            }
+        }
+        if let Some(run) = &run {
+            let n = model.n_states();
+            let mut x = vec![0.0; n];
+            for (k, &tk) in run.t.iter().enumerate() {
+                for (xi, col) in x.iter_mut().zip(&run.states) {
+                    *xi = col[k];
+                }
+                let vars = model.variable_values(tk, &x, &u);
+                for &j in &junctions {
+                    let e = s.effort.entry(j).or_default();
+                    e.peak = e.peak.max(level(&vars, j, false));
+                    let f = s.flow.entry(j).or_default();
+                    f.peak = f.peak.max(level(&vars, j, true));
+                }
+            }
+            for id in g.element_ids() {
+                let kind = g.element(id).kind;
+                if !kind.is_storage() {
+                    continue;
+                }
+                let Some(&(bond, _)) = g.ports(id).first() else {
+                    continue;
+                };
+                let name = match kind {
+                    ElementKind::I => Var::P(bond.number()),
+                    _ => Var::Q(bond.number()),
+                }
+                .to_string();
+                if let Some(v) = run.state(&name) {
+                    let peak = v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+                    s.state_peak.insert(id, peak);
+                }
+            }
+        }
+        s
+    }
+
+    pub(super) fn effort(&self, j: ElementId) -> Level {
+        self.effort.get(&j).copied().unwrap_or_default()
+    }
+
+    pub(super) fn flow(&self, j: ElementId) -> Level {
+        self.flow.get(&j).copied().unwrap_or_default()
+    }
+}

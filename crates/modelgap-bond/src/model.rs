@@ -1,0 +1,451 @@
+//! [`BondModel`]: a bond graph as a [`modelgap_core::Model`], the seam the
+//! measurement loop (compare, explain, add an effect) works through.
+//!
+//! The model drives its inputs from a recording, simulates at the
+//! recording's times and predicts every output; it offers the candidate
+//! effects of [`crate::effects`], builds fitted effects into a new model and
+//! writes that model as a bond-graph TOML file; and it says whether the
+//! paper's qualitative diagnosis (fault trees) points at a candidate.
+//!
+//! ```
+//! use modelgap_bond::{BondModel, library};
+//! use modelgap_bond::simulate::{Inputs, SimOptions, simulate, time_grid};
+//! use modelgap_core::Model as _;
+//!
+//! let motor = BondModel::new(library::dc_motor());
+//! // A recording of the motor: here simply the model's own run.
+//! let run = simulate(motor.graph(), &Inputs::new(), &time_grid(0.2, 1000.0), &SimOptions::default())?;
+//! let rec = run.to_recording(false)?;
+//! let coulomb = motor.candidates().into_iter().find(|c| c.id == "coulomb@1m").unwrap();
+//! let with_friction = motor.predict_with(&rec, &[(&coulomb, &[0.01])])?;
+//! let nominal = motor.predict(&rec)?;
+//! assert!(with_friction.get("omega").unwrap()[200] < nominal.get("omega").unwrap()[200]);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use std::borrow::Cow;
+use std::fmt::Write as _;
+
+use modelgap_core::residual::Threshold;
+use modelgap_core::{Candidate, CoreError, Effect, Model, Prediction, Recording};
+
+use crate::compiled::CompiledModel;
+use crate::diagnosis::{DiagnosisOptions, diagnose};
+use crate::effects;
+use crate::element::{ElementKind, Law};
+use crate::error::{BondError, Result};
+use crate::fault_tree::first_hypothesis_set;
+use crate::file::write_model;
+use crate::graph::BondGraph;
+use crate::simulate::{Inputs, ParamChange, Run, SimOptions, simulate, simulate_compiled};
+
+/// Relative tolerance of the adaptive solvers in [`BondModel`]'s predictions.
+pub const RTOL: f64 = 1e-8;
+
+/// Absolute tolerance of the adaptive solvers in [`BondModel`]'s predictions
+/// (in state units: V s, N m s, C; well below the states of the built-ins).
+pub const ATOL: f64 = 1e-10;
+
+/// Newton iterations of the steady start before giving up.
+const STEADY_MAX_ITERATIONS: usize = 100;
+
+/// Relative Newton step under which the steady start has converged.
+const STEADY_STEP_TOLERANCE: f64 = 1e-12;
+
+/// Where a prediction starts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Start {
+    /// All states zero: at rest, uncharged.
+    #[default]
+    Rest,
+    /// The steady state under the recording's first input values (Newton).
+    /// A periodic, position-dependent element (cogging) has no steady state
+    /// of its own: its position is held at 0 and the other states solved.
+    SteadyState,
+}
+
+/// A bond graph that the measurement loop can hold against a recording.
+///
+/// Holds the graph, the abrupt parameter changes found by explain (they
+/// happen during every prediction) and where predictions start.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BondModel {
+    graph: BondGraph,
+    changes: Vec<ParamChange>,
+    start: Start,
+    /// Plain descriptions of the effects built in, for the file's header.
+    added: Vec<String>,
+}
+
+impl BondModel {
+    /// A model of `graph`, starting at rest, with no abrupt changes.
+    pub fn new(graph: BondGraph) -> BondModel {
+        BondModel {
+            graph,
+            changes: Vec::new(),
+            start: Start::Rest,
+            added: Vec::new(),
+        }
+    }
+
+    /// The same model with predictions starting at `start`.
+    #[must_use]
+    pub fn with_start(mut self, start: Start) -> BondModel {
+        self.start = start;
+        self
+    }
+
+    /// The bond graph (with every effect built in so far).
+    pub fn graph(&self) -> &BondGraph {
+        &self.graph
+    }
+
+    /// The abrupt parameter changes made during every prediction.
+    pub fn changes(&self) -> &[ParamChange] {
+        &self.changes
+    }
+
+    /// Where predictions start.
+    pub fn start(&self) -> Start {
+        self.start
+    }
+
+    /// The graph with effects applied in turn, and the parameter changes of
+    /// the model followed by those of the effects.
+    ///
+    /// # Errors
+    /// [`BondError::BadEffect`] for an effect the graph does not offer or
+    /// values outside the candidate's bounds (see [`effects::apply`]).
+    pub fn edited(
+        &self,
+        effects: &[(&Candidate, &[f64])],
+    ) -> Result<(BondGraph, Vec<ParamChange>)> {
+        let mut graph = self.graph.clone();
+        let mut changes = self.changes.clone();
+        for (candidate, values) in effects {
+            let (g, ch) = effects::apply(&graph, candidate, values)?;
+            graph = g;
+            changes.extend(ch);
+        }
+        Ok((graph, changes))
+    }
+
+    /// Simulates the model with effects applied, driven by the recording's
+    /// inputs (those it holds; the others at their defaults), at the
+    /// recording's times.
+    ///
+    /// # Errors
+    /// As [`BondModel::edited`]; causality, equation and solver errors of the
+    /// edited graph; [`BondError::BadOptions`] when [`Start::SteadyState`]
+    /// finds no steady state.
+    pub fn run(&self, rec: &Recording, effects: &[(&Candidate, &[f64])]) -> Result<Run> {
+        let (graph, changes): (Cow<'_, BondGraph>, Vec<ParamChange>) = if effects.is_empty() {
+            (Cow::Borrowed(&self.graph), self.changes.clone())
+        } else {
+            let (g, ch) = self.edited(effects)?;
+            (Cow::Owned(g), ch)
+        };
+        let model = CompiledModel::new(&graph)?;
+        let input_names: Vec<String> = graph.inputs().keys().cloned().collect();
+        let inputs = Inputs::from_recording(rec, &input_names);
+        let initial_state = match self.start {
+            Start::Rest => None,
+            Start::SteadyState => {
+                let base = (!effects.is_empty()).then_some(&self.graph);
+                Some(steady_start(&graph, &model, rec, base)?)
+            }
+        };
+        let opts = SimOptions {
+            rtol: RTOL,
+            atol: ATOL,
+            initial_state,
+            changes,
+            ..SimOptions::default()
+        };
+        if opts.changes.is_empty() {
+            simulate_compiled(&model, &inputs, rec.t(), &opts)
+        } else {
+            simulate(&graph, &inputs, rec.t(), &opts)
+        }
+    }
+}
+
+impl From<BondGraph> for BondModel {
+    fn from(graph: BondGraph) -> BondModel {
+        BondModel::new(graph)
+    }
+}
+
+/// The loop's error for a failed prediction or edit, naming the effects.
+fn model_error(effects: &[(&Candidate, &[f64])], e: BondError) -> CoreError {
+    let message = match e {
+        // Already names the candidate and the parameter.
+        BondError::BadEffect { .. } => e.to_string(),
+        _ if effects.is_empty() => e.to_string(),
+        _ => format!(
+            "with {}: {e}",
+            effects
+                .iter()
+                .map(|(c, v)| format!("{} at {v:?}", c.id))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    };
+    CoreError::Model { message }
+}
+
+/// The first value of each model input in the recording (its default when
+/// the recording lacks it).
+fn first_inputs(model: &CompiledModel, rec: &Recording) -> Vec<f64> {
+    model
+        .input_names
+        .iter()
+        .zip(&model.input_defaults)
+        .map(|(n, d)| rec.signal(n).map_or(*d, |s| s.values[0]))
+        .collect()
+}
+
+/// Indices of the states of periodic position-dependent C elements (cogging):
+/// held at 0 by the steady start.
+fn held_states(g: &BondGraph, model: &CompiledModel) -> Vec<usize> {
+    let mut held = Vec::new();
+    for id in g.element_ids() {
+        let el = g.element(id);
+        if el.kind != ElementKind::C {
+            continue;
+        }
+        let Law::Nonlinear {
+            effort: Some(e), ..
+        } = &el.law
+        else {
+            continue;
+        };
+        if !effects::is_periodic(e) {
+            continue;
+        }
+        if let Some(&(bond, _)) = g.ports(id).first() {
+            let name = format!("q{}", bond.number());
+            if let Some(i) = model.state_names.iter().position(|n| *n == name) {
+                held.push(i);
+            }
+        }
+    }
+    held
+}
+
+/// The steady state of `graph` under the recording's first inputs, from the
+/// steady state of `base` (the graph before the effects, mapped by state
+/// name) when given.
+fn steady_start(
+    graph: &BondGraph,
+    model: &CompiledModel,
+    rec: &Recording,
+    base: Option<&BondGraph>,
+) -> Result<Vec<f64>> {
+    let mut guess = vec![0.0; model.n_states()];
+    if let Some(base) = base {
+        let bm = CompiledModel::new(base)?;
+        let bu = first_inputs(&bm, rec);
+        if let Ok(bx) = newton(&bm, &bu, &vec![0.0; bm.n_states()], &held_states(base, &bm)) {
+            for (name, v) in bm.state_names.iter().zip(bx) {
+                if let Some(i) = model.state_names.iter().position(|n| n == name) {
+                    guess[i] = v;
+                }
+            }
+        }
+    }
+    let u0 = first_inputs(model, rec);
+    newton(model, &u0, &guess, &held_states(graph, model))
+        .map_err(|e| BondError::BadOptions(format!("no steady state to start from: {e}")))
+}
+
+/// Damped Newton for `f(x, u) = 0` over the states not in `held` (those stay 0).
+fn newton(model: &CompiledModel, u: &[f64], x0: &[f64], held: &[usize]) -> Result<Vec<f64>> {
+    let n = model.n_states();
+    let free: Vec<usize> = (0..n).filter(|i| !held.contains(i)).collect();
+    let m = free.len();
+    let mut x = x0.to_vec();
+    for &i in held {
+        x[i] = 0.0;
+    }
+    if m == 0 {
+        return Ok(x);
+    }
+    let mut scratch = model.scratch();
+    let mut dx_all = vec![0.0; n];
+    let mut residual = |x: &[f64], out: &mut [f64]| {
+        model.eval(0.0, x, u, &mut scratch);
+        model.read_derivatives(&scratch, &mut dx_all);
+        for (o, &i) in out.iter_mut().zip(&free) {
+            *o = dx_all[i];
+        }
+    };
+    let norm = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let mut r = vec![0.0; m];
+    let mut r2 = vec![0.0; m];
+    let mut jac = nalgebra::DMatrix::zeros(m, m);
+    for _ in 0..STEADY_MAX_ITERATIONS {
+        residual(&x, &mut r);
+        let r_norm = norm(&r);
+        if r_norm == 0.0 {
+            return Ok(x);
+        }
+        let scale = x.iter().fold(1e-12_f64, |a, v| a.max(v.abs()));
+        for (col, &j) in free.iter().enumerate() {
+            let h = 1e-7 * x[j].abs().max(1e-6 * scale).max(1e-4);
+            let keep = x[j];
+            x[j] = keep + h;
+            residual(&x, &mut r2);
+            x[j] = keep;
+            for row in 0..m {
+                jac[(row, col)] = (r2[row] - r[row]) / h;
+            }
+        }
+        let rhs = nalgebra::DVector::from_iterator(m, r.iter().map(|v| -v));
+        let step = jac
+            .clone()
+            .lu()
+            .solve(&rhs)
+            .ok_or_else(|| BondError::BadOptions("the Jacobian is singular".to_string()))?;
+        let rel = free
+            .iter()
+            .zip(step.iter())
+            .map(|(&i, d)| d.abs() / x[i].abs().max(1e-9 * scale.max(1.0)))
+            .fold(0.0, f64::max);
+        // Backtracking: the largest of 1, 1/2, … 1/1024 that lowers the residual.
+        let mut lambda = 1.0;
+        let mut trial = x.clone();
+        loop {
+            for (&i, d) in free.iter().zip(step.iter()) {
+                trial[i] = x[i] + lambda * d;
+            }
+            residual(&trial, &mut r2);
+            if norm(&r2) < r_norm || lambda < 1e-3 {
+                break;
+            }
+            lambda *= 0.5;
+        }
+        x.copy_from_slice(&trial);
+        if x.iter().any(|v| !v.is_finite()) {
+            break;
+        }
+        if rel < STEADY_STEP_TOLERANCE {
+            return Ok(x);
+        }
+    }
+    Err(BondError::BadOptions(
+        "Newton's method did not converge".to_string(),
+    ))
+}
+
+impl Model for BondModel {
+    fn name(&self) -> String {
+        self.graph.name.clone()
+    }
+
+    fn outputs(&self) -> Vec<String> {
+        self.graph
+            .outputs()
+            .iter()
+            .map(|o| o.name.clone())
+            .collect()
+    }
+
+    fn unit(&self, output: &str) -> String {
+        self.graph
+            .outputs()
+            .iter()
+            .find(|o| o.name == output)
+            .map(|o| o.unit.clone())
+            .unwrap_or_default()
+    }
+
+    fn predict_with(
+        &self,
+        rec: &Recording,
+        effects: &[(&Candidate, &[f64])],
+    ) -> modelgap_core::Result<Prediction> {
+        let run = self
+            .run(rec, effects)
+            .map_err(|e| model_error(effects, e))?;
+        Ok(Prediction {
+            names: run.output_names,
+            values: run.outputs,
+        })
+    }
+
+    fn candidates(&self) -> Vec<Candidate> {
+        effects::candidates(&self.graph)
+    }
+
+    fn with_effects(&self, effects: &[Effect]) -> modelgap_core::Result<Box<dyn Model>> {
+        let pairs: Vec<(&Candidate, &[f64])> = effects
+            .iter()
+            .map(|e| (&e.candidate, e.values.as_slice()))
+            .collect();
+        let (graph, changes) = self.edited(&pairs).map_err(|e| model_error(&pairs, e))?;
+        let mut added = self.added.clone();
+        added.extend(effects.iter().map(|e| e.to_string()));
+        Ok(Box::new(BondModel {
+            graph,
+            changes,
+            start: self.start,
+            added,
+        }))
+    }
+
+    /// The graph as a model file, headed by a comment line per effect built
+    /// in and per abrupt change (`# fault: R becomes 1.2 at t = 0.5 s …`);
+    /// the file itself holds no abrupt changes, only the graph.
+    fn to_file_text(&self) -> Option<String> {
+        let mut s = String::new();
+        for a in &self.added {
+            let _ = writeln!(s, "# added by explain: {a}");
+        }
+        for c in &self.changes {
+            let _ = writeln!(
+                s,
+                "# fault: {} becomes {} at t = {} s (abrupt change found by explain)",
+                c.name, c.value, c.at
+            );
+        }
+        s.push_str(&write_model(&self.graph));
+        Some(s)
+    }
+
+    fn file_extension(&self) -> &'static str {
+        "toml"
+    }
+
+    /// Runs the paper's diagnosis ([`diagnose`], a band of 5 noise sigmas,
+    /// persistence 3, the model's start) and says whether the parameter a
+    /// candidate acts through is in the first hypothesis set of the fault
+    /// trees at the final stage. Deviations and abrupt changes look for
+    /// their parameter (either sign); missing elements for the nearest
+    /// parameter effect: viscous friction and a brush drop for the
+    /// junction's R increasing, Coulomb friction and a load for the
+    /// junction's load input or R increasing, extra inertia for the
+    /// junction's inertia (either sign). `None` for the others, when the
+    /// diagnosis cannot run, or when it detects nothing.
+    fn qualitative_agreement(&self, rec: &Recording, candidate: &Candidate) -> Option<bool> {
+        let targets = effects::qualitative_targets(&self.graph, candidate)?;
+        let opts = DiagnosisOptions {
+            threshold: Threshold::Noise { sigmas: 5.0 },
+            persistence: 3,
+            steady_start: self.start == Start::SteadyState,
+            sim: SimOptions {
+                rtol: RTOL,
+                atol: ATOL,
+                ..SimOptions::default()
+            },
+            ..DiagnosisOptions::default()
+        };
+        let d = diagnose(&self.graph, rec, &opts).ok()?;
+        d.detected_at?;
+        let set = first_hypothesis_set(&d.trees);
+        Some(targets.iter().any(|(param, sign)| {
+            set.iter()
+                .any(|h| h.param == *param && sign.is_none_or(|s| h.deviation == s))
+        }))
+    }
+}
