@@ -12,6 +12,10 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+
+/// The same allocator as the `modelgap` binary (see src/main.rs).
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 use modelgap::bond::compiled::CompiledModel;
 use modelgap::bond::library;
 use modelgap::bond::simulate::{

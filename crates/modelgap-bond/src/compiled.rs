@@ -33,6 +33,12 @@ pub struct CompiledModel {
     /// True when the equations are linear and time-invariant in states and
     /// inputs (no nonlinear law, no modulated element, no `t`).
     pub is_lti: bool,
+    /// True when the state derivatives and outputs are affine in the states
+    /// with coefficients that depend on nothing (`ẋ = A x + b(u)`,
+    /// `y = C x + d(u)`): inputs may enter nonlinearly (a switch's `m · Vs`)
+    /// but never multiply a state. With piecewise-constant inputs (PWM,
+    /// zero-order hold) such a model is integrated exactly.
+    pub is_state_affine: bool,
 }
 
 impl CompiledModel {
@@ -72,12 +78,15 @@ impl CompiledModel {
         }
         let mut builder = TapeBuilder::new(next);
         let mut is_lti = true;
+        let mut deps: BTreeMap<Var, Dep> = eqs.states.iter().map(|s| (s.var, Dep::State)).collect();
         for &i in &eqs.order {
             let eq = &eqs.equations[i];
             let dst = slots[&eq.target];
             if !affine_in_slots(&eq.rhs) {
                 is_lti = false;
             }
+            let d = dependence(&eq.rhs, &deps);
+            deps.insert(eq.target, d);
             builder.assign(dst, &eq.rhs, &mut |leaf: &Expr| -> Result<Leaf> {
                 match leaf {
                     Expr::Param(name) => g.param(name).map(Leaf::Const),
@@ -123,6 +132,12 @@ impl CompiledModel {
                 detail: "reads a variable no equation computes".to_string(),
             })?;
         let var_slots = slots.iter().map(|(v, s)| (*v, *s)).collect();
+        let is_state_affine = eqs
+            .states
+            .iter()
+            .map(|s| s.derivative)
+            .chain(eqs.outputs.iter().map(|o| o.var))
+            .all(|v| deps.get(&v).is_some_and(|d| *d <= Dep::State));
         Ok(CompiledModel {
             tape,
             var_slots,
@@ -139,6 +154,7 @@ impl CompiledModel {
                 .collect(),
             output_names: eqs.outputs.iter().map(|o| o.name.clone()).collect(),
             is_lti,
+            is_state_affine,
         })
     }
 
@@ -261,6 +277,58 @@ impl CompiledModel {
     /// Slot of input `j` in the scratch buffer (for drivers that write inputs in place).
     pub fn input_slot(&self, j: usize) -> usize {
         1 + self.n_states + j
+    }
+}
+
+/// What a variable depends on, from least to most: a constant, inputs only
+/// (in any way), states affinely with constant coefficients (plus inputs),
+/// or anything else (a state times an input, a nonlinear law, time).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Dep {
+    Const,
+    Input,
+    State,
+    Nonlinear,
+}
+
+/// The dependence of an expression, given that of the variables it reads.
+fn dependence(e: &Expr, vars: &BTreeMap<Var, Dep>) -> Dep {
+    let all = |v: &[Expr]| {
+        v.iter()
+            .map(|x| dependence(x, vars))
+            .max()
+            .unwrap_or(Dep::Const)
+    };
+    match e {
+        Expr::Num(_) | Expr::Param(_) => Dep::Const,
+        Expr::Input(_) => Dep::Input,
+        Expr::Var(v) => vars.get(v).copied().unwrap_or(Dep::Nonlinear),
+        Expr::Local(_) | Expr::Time => Dep::Nonlinear,
+        Expr::Neg(a) => dependence(a, vars),
+        Expr::Add(v) => all(v),
+        Expr::Mul(v) => {
+            let d: Vec<Dep> = v.iter().map(|x| dependence(x, vars)).collect();
+            let states = d.iter().filter(|x| **x == Dep::State).count();
+            if d.contains(&Dep::Nonlinear) || states > 1 || (states == 1 && d.contains(&Dep::Input))
+            {
+                Dep::Nonlinear
+            } else {
+                d.into_iter().max().unwrap_or(Dep::Const)
+            }
+        }
+        Expr::Div(a, b) => match (dependence(a, vars), dependence(b, vars)) {
+            (x, Dep::Const) => x,
+            (x, Dep::Input) if x <= Dep::Input => Dep::Input,
+            _ => Dep::Nonlinear,
+        },
+        Expr::Pow(a, b) => match dependence(a, vars).max(dependence(b, vars)) {
+            x if x <= Dep::Input => x,
+            _ => Dep::Nonlinear,
+        },
+        Expr::Call(_, v) => match all(v) {
+            x if x <= Dep::Input => x,
+            _ => Dep::Nonlinear,
+        },
     }
 }
 

@@ -37,7 +37,7 @@ use crate::error::{BondError, Result};
 use crate::fault_tree::first_hypothesis_set;
 use crate::file::write_model;
 use crate::graph::BondGraph;
-use crate::simulate::{Inputs, ParamChange, Run, SimOptions, simulate, simulate_compiled};
+use crate::simulate::{Hold, Inputs, ParamChange, Run, SimOptions, simulate, simulate_compiled};
 
 /// Relative tolerance of the adaptive solvers in [`BondModel`]'s predictions.
 pub const RTOL: f64 = 1e-8;
@@ -75,6 +75,8 @@ pub struct BondModel {
     start: Start,
     /// Plain descriptions of the effects built in, for the file's header.
     added: Vec<String>,
+    /// How recorded inputs are held between samples.
+    hold: Hold,
 }
 
 impl BondModel {
@@ -85,7 +87,18 @@ impl BondModel {
             changes: Vec::new(),
             start: Start::Rest,
             added: Vec::new(),
+            hold: Hold::Zero,
         }
+    }
+
+    /// The same model with recorded inputs held as `hold` between samples.
+    /// Default: zero-order hold, right for commanded inputs (a voltage set
+    /// by a controller changes at a sample and stays); use linear hold for
+    /// a sampled analog input.
+    #[must_use]
+    pub fn with_hold(mut self, hold: Hold) -> BondModel {
+        self.hold = hold;
+        self
     }
 
     /// The same model with predictions starting at `start`.
@@ -147,7 +160,7 @@ impl BondModel {
         };
         let model = CompiledModel::new(&graph)?;
         let input_names: Vec<String> = graph.inputs().keys().cloned().collect();
-        let inputs = Inputs::from_recording(rec, &input_names);
+        let inputs = Inputs::from_recording_with(rec, &input_names, self.hold);
         let initial_state = match self.start {
             Start::Rest => None,
             Start::SteadyState => {
@@ -391,6 +404,7 @@ impl Model for BondModel {
             changes,
             start: self.start,
             added,
+            hold: self.hold,
         }))
     }
 

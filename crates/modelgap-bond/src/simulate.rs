@@ -13,7 +13,6 @@
 use std::collections::BTreeMap;
 
 use modelgap_core::{Recording, Signal};
-use nalgebra::{DMatrix, DVector};
 
 use crate::compiled::CompiledModel;
 use crate::error::{BondError, Result};
@@ -126,7 +125,7 @@ impl Drive {
 
     /// The value at time `t`; `cursor` speeds up monotone queries of sampled drives.
     #[inline]
-    fn value(&self, t: f64, cursor: &mut usize) -> f64 {
+    pub(crate) fn value(&self, t: f64, cursor: &mut usize) -> f64 {
         match self {
             Drive::Constant(v) => *v,
             Drive::Sampled {
@@ -174,15 +173,22 @@ impl Drive {
     }
 
     /// Times in `(t0, t1]` where the drive jumps.
-    fn breakpoints(&self, t0: f64, t1: f64, out: &mut Vec<f64>) {
+    pub(crate) fn breakpoints(&self, t0: f64, t1: f64, out: &mut Vec<f64>) {
         match self {
             Drive::Constant(_) => {}
             Drive::Sampled {
                 t,
+                values,
                 hold: Hold::Zero,
-                ..
             } => {
-                out.extend(t.iter().copied().filter(|&x| x > t0 && x <= t1));
+                // Only where the held value changes: a 1 kHz recording of a
+                // voltage that steps four times has four discontinuities,
+                // not four thousand.
+                for k in 1..t.len() {
+                    if values[k] != values[k - 1] && t[k] > t0 && t[k] <= t1 {
+                        out.push(t[k]);
+                    }
+                }
             }
             Drive::Sampled {
                 hold: Hold::Linear, ..
@@ -291,6 +297,11 @@ impl Inputs {
 
     /// Drives every model input found in `rec` from that recording (linear hold).
     pub fn from_recording(rec: &Recording, input_names: &[String]) -> Inputs {
+        Inputs::from_recording_with(rec, input_names, Hold::Linear)
+    }
+
+    /// Drives every model input found in `rec` from that recording, held as `hold`.
+    pub fn from_recording_with(rec: &Recording, input_names: &[String], hold: Hold) -> Inputs {
         let mut inputs = Inputs::new();
         for name in input_names {
             if let Some(s) = rec.signal(name) {
@@ -299,7 +310,7 @@ impl Inputs {
                     Drive::Sampled {
                         t: rec.t().to_vec(),
                         values: s.values.clone(),
-                        hold: Hold::Linear,
+                        hold,
                     },
                 );
             }
@@ -576,20 +587,21 @@ fn simulate_from(
         None => vec![0.0; n],
     };
     let t_end = *t_out.last().unwrap_or(&t0);
-    let has_pwm = drives.iter().any(|d| matches!(d, Drive::Pwm { .. }));
+    let exact_ok =
+        model.is_lti || model.is_state_affine && crate::exact::piecewise_constant(&drives);
     let exact = match opts.solver {
-        Solver::Exact if !model.is_lti => {
+        Solver::Exact if !exact_ok => {
             return Err(BondError::BadOptions(
-                "the exact solver needs a linear time-invariant model (no nonlinear law, no modulated element)".to_string(),
+                "the exact solver needs a model affine in its states (no nonlinear law) and, unless it is also linear in its inputs, piecewise-constant inputs (constant, PWM, zero-order hold)".to_string(),
             ));
         }
         Solver::Exact => true,
-        Solver::Auto => model.is_lti && !has_pwm,
+        Solver::Auto => exact_ok,
         _ => false,
     };
-    let mut states = vec![0.0; t_out.len() * n];
-    let stats = if exact {
-        exact_lti(model, &drives, t0, &x0, t_out, &mut states)?
+    let p = model.n_outputs();
+    let (states, stats) = if exact {
+        crate::exact::integrate(model, &drives, t0, &x0, t_out)?
     } else {
         let mut bps = Vec::new();
         for d in &drives {
@@ -609,54 +621,90 @@ fn simulate_from(
             ..OdeOptions::default()
         };
         let mut sys = System::new(model, &drives);
-        ode::solve(
-            &mut sys,
-            method,
-            t0,
-            &x0,
-            t_out,
-            &bps,
-            &ode_opts,
-            &mut states,
-        )?
+        let mut rows = vec![0.0; t_out.len() * n];
+        let stats = ode::solve(&mut sys, method, t0, &x0, t_out, &bps, &ode_opts, &mut rows)?;
+        let columns = (0..n)
+            .map(|i| (0..t_out.len()).map(|k| rows[k * n + i]).collect())
+            .collect();
+        (columns, stats)
     };
-    // Outputs and applied inputs at the output times.
+    // Outputs and applied inputs at the output times, column by column.
     let m = model.n_inputs();
-    let p = model.n_outputs();
-    let mut scratch = model.scratch();
-    let mut u = vec![0.0; m];
-    let mut y = vec![0.0; p];
-    let mut cursors = vec![0usize; m];
-    let mut run = Run {
-        t: t_out.to_vec(),
-        state_names: model.state_names.clone(),
-        states: vec![Vec::with_capacity(t_out.len()); n],
-        input_names: model.input_names.clone(),
-        inputs: vec![Vec::with_capacity(t_out.len()); m],
-        output_names: model.output_names.clone(),
-        outputs: vec![Vec::with_capacity(t_out.len()); p],
-        stats,
-    };
-    for (k, &t) in t_out.iter().enumerate() {
-        let x = &states[k * n..(k + 1) * n];
-        for j in 0..m {
-            u[j] = drives[j].value(t, &mut cursors[j]);
-        }
-        model.eval(t, x, &u, &mut scratch);
-        model.read_outputs(&scratch, &mut y);
-        for (column, &v) in run.states.iter_mut().zip(x) {
-            column.push(v);
-        }
-        for (column, &v) in run.inputs.iter_mut().zip(&u) {
-            column.push(v);
-        }
-        for (i, &v) in y.iter().enumerate() {
-            if !v.is_finite() {
-                return Err(BondError::Ode(ode::OdeError::NonFinite { t, component: i }));
+    let len = t_out.len();
+    let inputs: Vec<Vec<f64>> = drives
+        .iter()
+        .map(|d| match d {
+            Drive::Constant(v) => vec![*v; len],
+            _ => {
+                let mut cursor = 0;
+                t_out.iter().map(|&t| d.value(t, &mut cursor)).collect()
             }
-            run.outputs[i].push(v);
+        })
+        .collect();
+    let outputs: Vec<Vec<f64>> = if model.is_lti {
+        // y = C x + D u + e, column by column.
+        let aff = crate::exact::Affine::of(model);
+        (0..p)
+            .map(|i| {
+                let c = &aff.cy[i * n..(i + 1) * n];
+                let d = &aff.dy[i * m..(i + 1) * m];
+                let mut y = vec![aff.ey[i]; len];
+                for (j, &dj) in d.iter().enumerate() {
+                    if dj != 0.0 {
+                        for (yk, uk) in y.iter_mut().zip(&inputs[j]) {
+                            *yk += dj * uk;
+                        }
+                    }
+                }
+                for (j, &cj) in c.iter().enumerate() {
+                    if cj != 0.0 {
+                        for (yk, xk) in y.iter_mut().zip(&states[j]) {
+                            *yk += cj * xk;
+                        }
+                    }
+                }
+                y
+            })
+            .collect()
+    } else {
+        let mut scratch = model.scratch();
+        let mut x = vec![0.0; n];
+        let mut u = vec![0.0; m];
+        let mut y = vec![0.0; p];
+        let mut out = vec![Vec::with_capacity(len); p];
+        for (k, &t) in t_out.iter().enumerate() {
+            for (uj, column) in u.iter_mut().zip(&inputs) {
+                *uj = column[k];
+            }
+            for (xi, column) in x.iter_mut().zip(&states) {
+                *xi = column[k];
+            }
+            model.eval(t, &x, &u, &mut scratch);
+            model.read_outputs(&scratch, &mut y);
+            for (column, &v) in out.iter_mut().zip(&y) {
+                column.push(v);
+            }
+        }
+        out
+    };
+    for (i, column) in outputs.iter().enumerate() {
+        if let Some(k) = column.iter().position(|v| !v.is_finite()) {
+            return Err(BondError::Ode(ode::OdeError::NonFinite {
+                t: t_out[k],
+                component: i,
+            }));
         }
     }
+    let run = Run {
+        t: t_out.to_vec(),
+        state_names: model.state_names.clone(),
+        states,
+        input_names: model.input_names.clone(),
+        inputs,
+        output_names: model.output_names.clone(),
+        outputs,
+        stats,
+    };
     Ok(run)
 }
 
@@ -694,163 +742,4 @@ impl OdeSystem for System<'_> {
         self.model.eval(t, x, &self.u, &mut self.scratch);
         self.model.read_derivatives(&self.scratch, dx);
     }
-}
-
-/// The affine model `ẋ = A x + B u + c` of an LTI compiled model, read off
-/// the tape with unit vectors (exact, since the tape is affine).
-pub fn affine_matrices(model: &CompiledModel) -> (DMatrix<f64>, DMatrix<f64>, DVector<f64>) {
-    let n = model.n_states();
-    let m = model.n_inputs();
-    let mut scratch = model.scratch();
-    let mut dx = vec![0.0; n];
-    let zero_x = vec![0.0; n];
-    let zero_u = vec![0.0; m];
-    model.eval(0.0, &zero_x, &zero_u, &mut scratch);
-    model.read_derivatives(&scratch, &mut dx);
-    let c = DVector::from_column_slice(&dx);
-    let mut a = DMatrix::zeros(n, n);
-    let mut b = DMatrix::zeros(n, m);
-    let mut x = zero_x.clone();
-    for j in 0..n {
-        x[j] = 1.0;
-        model.eval(0.0, &x, &zero_u, &mut scratch);
-        model.read_derivatives(&scratch, &mut dx);
-        for i in 0..n {
-            a[(i, j)] = dx[i] - c[i];
-        }
-        x[j] = 0.0;
-    }
-    let mut u = zero_u.clone();
-    for j in 0..m {
-        u[j] = 1.0;
-        model.eval(0.0, &zero_x, &u, &mut scratch);
-        model.read_derivatives(&scratch, &mut dx);
-        for i in 0..n {
-            b[(i, j)] = dx[i] - c[i];
-        }
-        u[j] = 0.0;
-    }
-    (a, b, c)
-}
-
-/// Discretisation over one interval `h`: `x⁺ = Φ x + Γ0 w0 + Γ1 (w1 − w0)`
-/// with `w = [u; 1]` (the constant term rides as an input equal to 1).
-struct Discrete {
-    phi: DMatrix<f64>,
-    gamma0: DMatrix<f64>,
-    gamma1: DMatrix<f64>,
-}
-
-fn discretise(a: &DMatrix<f64>, bw: &DMatrix<f64>, h: f64) -> Discrete {
-    // exp of [[A h, B h, 0], [0, 0, I], [0, 0, 0]] gives Φ, Γ0 and Γ1 (first-order hold).
-    let n = a.nrows();
-    let m = bw.ncols();
-    let mut big = DMatrix::zeros(n + 2 * m, n + 2 * m);
-    big.view_mut((0, 0), (n, n)).copy_from(&(a * h));
-    big.view_mut((0, n), (n, m)).copy_from(&(bw * h));
-    for j in 0..m {
-        big[(n + j, n + m + j)] = 1.0;
-    }
-    let e = big.exp();
-    Discrete {
-        phi: e.view((0, 0), (n, n)).into_owned(),
-        gamma0: e.view((0, n), (n, m)).into_owned(),
-        gamma1: e.view((0, n + m), (n, m)).into_owned(),
-    }
-}
-
-fn exact_lti(
-    model: &CompiledModel,
-    drives: &[Drive],
-    t0: f64,
-    x0: &[f64],
-    t_out: &[f64],
-    out: &mut [f64],
-) -> Result<OdeStats> {
-    let n = model.n_states();
-    let m = model.n_inputs();
-    let (a, b, c) = affine_matrices(model);
-    let mut bw = DMatrix::zeros(n, m + 1);
-    bw.view_mut((0, 0), (n, m)).copy_from(&b);
-    bw.set_column(m, &c);
-    // The grid: output times plus every sample time of sampled drives, so
-    // that inputs are exactly linear (or constant) on each interval.
-    let t_end = *t_out.last().unwrap_or(&t0);
-    let mut grid: Vec<f64> = t_out.to_vec();
-    let mut zoh = vec![false; m];
-    for (j, d) in drives.iter().enumerate() {
-        match d {
-            Drive::Sampled { t, hold, .. } => {
-                grid.extend(t.iter().copied().filter(|&x| x > t0 && x < t_end));
-                zoh[j] = *hold == Hold::Zero;
-            }
-            // A PWM is constant between its edges: put every edge on the grid.
-            Drive::Pwm { .. } => {
-                d.breakpoints(t0, t_end, &mut grid);
-                zoh[j] = true;
-            }
-            Drive::Constant(_) => {}
-        }
-    }
-    if t0 < t_out[0] {
-        grid.push(t0);
-    }
-    grid.sort_by(f64::total_cmp);
-    grid.dedup_by(|x, y| (*x - *y).abs() <= 1e-12 * x.abs().max(1.0));
-    let mut cache: Vec<(f64, Discrete)> = Vec::new();
-    let mut x = DVector::from_column_slice(x0);
-    let mut x_next = DVector::zeros(n);
-    let mut w0 = DVector::zeros(m + 1);
-    let mut w1 = DVector::zeros(m + 1);
-    let mut cursors = vec![0usize; m];
-    let mut k_out = 0;
-    let mut steps = 0;
-    let mut t = grid[0];
-    if (t - t_out[0]).abs() <= 1e-12 * t.abs().max(1.0) {
-        out[..n].copy_from_slice(x.as_slice());
-        k_out = 1;
-    }
-    for &t_next in &grid[1..] {
-        let h = t_next - t;
-        let idx = match cache.iter().position(|(hh, _)| (hh - h).abs() <= 1e-12 * h) {
-            Some(i) => i,
-            None => {
-                cache.push((h, discretise(&a, &bw, h)));
-                cache.len() - 1
-            }
-        };
-        let d = &cache[idx].1;
-        for j in 0..m {
-            w0[j] = drives[j].value(t, &mut cursors[j]);
-            // Zero-order hold: the value is constant over the interval.
-            w1[j] = if zoh[j] {
-                w0[j]
-            } else {
-                drives[j].value(t_next, &mut cursors[j])
-            };
-        }
-        w0[m] = 1.0;
-        w1[m] = 1.0;
-        // x⁺ = Φ x + Γ0 w0 + Γ1 (w1 − w0), without allocating.
-        for (a, b) in w1.iter_mut().zip(w0.iter()) {
-            *a -= b;
-        }
-        x_next.gemv(1.0, &d.phi, &x, 0.0);
-        x_next.gemv(1.0, &d.gamma0, &w0, 1.0);
-        x_next.gemv(1.0, &d.gamma1, &w1, 1.0);
-        std::mem::swap(&mut x, &mut x_next);
-        steps += 1;
-        t = t_next;
-        if k_out < t_out.len() && (t - t_out[k_out]).abs() <= 1e-12 * t.abs().max(1.0) {
-            if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-                return Err(BondError::Ode(ode::OdeError::NonFinite { t, component: i }));
-            }
-            out[k_out * n..(k_out + 1) * n].copy_from_slice(x.as_slice());
-            k_out += 1;
-        }
-    }
-    Ok(OdeStats {
-        steps,
-        ..OdeStats::default()
-    })
 }

@@ -33,6 +33,14 @@ use crate::model::Model;
 use crate::recording::Recording;
 use crate::residual::{FailureWindow, failure_windows, rms};
 
+/// Iterations of the quick fit at each grid start (the best start is then
+/// refined with the full fit).
+const GRID_ITERATIONS: usize = 4;
+
+/// Two candidates whose weighted costs differ by less than this fraction are
+/// the same explanation (e.g. "J is off" and "an extra inertia dJ").
+const EQUIVALENT_COST: f64 = 1e-6;
+
 /// A progress callback: `(done, total)` candidate fits.
 pub type Progress = Arc<dyn Fn(usize, usize) + Send + Sync>;
 
@@ -147,6 +155,9 @@ pub struct RankedCandidate {
     pub qualitative: Option<bool>,
     /// Why the fit failed, if it did (the candidate then ranks last).
     pub error: Option<String>,
+    /// Ids of candidates that explain the recording exactly as well with as
+    /// many parameters: the same physics said another way.
+    pub equivalent: Vec<String>,
 }
 
 impl RankedCandidate {
@@ -474,7 +485,7 @@ fn fit_candidate(
                 let b: Vec<(f64, f64)> = free_idx.iter().map(|&i| bounds[i]).collect();
                 let s: Vec<f64> = free_idx.iter().map(|&i| scales[i]).collect();
                 let mut quick = fit_opts.clone();
-                quick.max_iterations = quick.max_iterations.min(15);
+                quick.max_iterations = quick.max_iterations.min(GRID_ITERATIONS);
                 fit(&problem, &x0, &b, &s, &quick, cancel).map(|r| (r.cost_after, r.params))
             };
             if let Ok((cost, free)) = result
@@ -578,6 +589,17 @@ fn ranked(target: &Target, f: &Fitted, cost_before: f64, n_eff: f64, n: usize) -
             .map_or(Termination::Stalled, |r| r.termination),
         qualitative: None,
         error: f.error.clone(),
+        equivalent: Vec::new(),
+    }
+}
+
+/// Tie-break between equally good candidates: the simplest change first — a
+/// parameter that is off, then a missing element, then an abrupt change.
+fn kind_rank(k: crate::effect::EffectKind) -> u8 {
+    match k {
+        crate::effect::EffectKind::ParameterDeviation => 0,
+        crate::effect::EffectKind::MissingElement => 1,
+        crate::effect::EffectKind::AbruptChange => 2,
     }
 }
 
@@ -652,6 +674,45 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         .map(|f| ranked(&target, f, cost_before, n_eff, n))
         .collect();
     ranking.sort_by(|a, b| b.score.total_cmp(&a.score));
+    // Within a run of equivalent candidates (same cost, same number of
+    // parameters), the simplest change first.
+    let equivalent = |a: &RankedCandidate, b: &RankedCandidate| {
+        a.error.is_none()
+            && b.error.is_none()
+            && a.candidate.params.len() == b.candidate.params.len()
+            && (a.cost - b.cost).abs() <= EQUIVALENT_COST * a.cost.abs().max(b.cost.abs())
+    };
+    let mut i = 0;
+    while i < ranking.len() {
+        let mut j = i;
+        while j + 1 < ranking.len() && equivalent(&ranking[i], &ranking[j + 1]) {
+            j += 1;
+        }
+        ranking[i..=j].sort_by(|a, b| {
+            kind_rank(a.candidate.kind)
+                .cmp(&kind_rank(b.candidate.kind))
+                .then_with(|| a.candidate.id.cmp(&b.candidate.id))
+        });
+        i = j + 1;
+    }
+    let costs: Vec<(String, f64, usize)> = ranking
+        .iter()
+        .map(|r| (r.candidate.id.clone(), r.cost, r.candidate.params.len()))
+        .collect();
+    for r in &mut ranking {
+        if r.error.is_some() {
+            continue;
+        }
+        r.equivalent = costs
+            .iter()
+            .filter(|(id, c, k)| {
+                *id != r.candidate.id
+                    && *k == r.candidate.params.len()
+                    && (c - r.cost).abs() <= EQUIVALENT_COST * r.cost.abs()
+            })
+            .map(|(id, _, _)| id.clone())
+            .collect();
+    }
     let margin = match (ranking.first(), ranking.get(1)) {
         (Some(a), Some(b)) if b.score.is_finite() => a.score - b.score,
         (Some(a), _) => a.score,
@@ -674,9 +735,11 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
     let mut chosen: Vec<RankedCandidate> = Vec::new();
     let mut verdict = Verdict::NothingMissing;
     let mut after_weighted = base_weighted.clone();
+    // At the floor already: whatever a candidate gains is noise.
+    let at_floor = floor_ok(&rms_before);
     if let Some(best) = ranking
         .first()
-        .filter(|b| b.score > opts.significance && b.error.is_none())
+        .filter(|b| !at_floor && b.score > opts.significance && b.error.is_none())
     {
         chosen.push(best.clone());
         verdict = Verdict::EffectFound;
