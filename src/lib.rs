@@ -43,7 +43,11 @@
 
 pub use modelgap_bond as bond;
 pub use modelgap_core::residual::{FailureWindow, NoiseFloor, Residual, ResidualStats, Threshold};
-pub use modelgap_core::{CoreError, Location, Recording, Signal, io, math, residual};
+pub use modelgap_core::{
+    Candidate, CompareOptions, Comparison, CoreError, Effect, EffectKind, EffectParam,
+    ExplainOptions, Explanation, Location, Model, OutputComparison, Prediction, RankedCandidate,
+    Recording, Signal, Verdict, compare, explain, fit, io, math, report, residual, story,
+};
 
 pub use modelgap_bond::BondError;
 

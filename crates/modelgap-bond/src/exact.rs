@@ -149,7 +149,8 @@ fn discretise(a: &DMatrix<f64>, h: f64) -> Step {
     }
 }
 
-/// The merge of two sorted lists of times from `t0` on, near-duplicates dropped.
+/// The merge of the sorted output times `a` and extra grid points `b` from
+/// `t0` on; extra points that nearly repeat the last point are dropped.
 struct Merge<'a> {
     a: &'a [f64],
     b: &'a [f64],
@@ -165,22 +166,29 @@ impl Iterator for Merge<'_> {
     #[inline]
     fn next(&mut self) -> Option<f64> {
         loop {
-            let next = match (self.a.get(self.i), self.b.get(self.j)) {
+            // Output times are always yielded (each needs its row); an extra
+            // point close to the last point is dropped.
+            let (next, output) = match (self.a.get(self.i), self.b.get(self.j)) {
                 (Some(&x), Some(&y)) if x <= y => {
                     self.i += 1;
-                    x
+                    (x, true)
                 }
                 (_, Some(&y)) => {
                     self.j += 1;
-                    y
+                    (y, false)
                 }
                 (Some(&x), None) => {
                     self.i += 1;
-                    x
+                    (x, true)
                 }
                 (None, None) => return None,
             };
-            if next >= self.t0 && (next - self.last).abs() > 1e-12 * next.abs().max(1.0) {
+            let fresh = if output {
+                next > self.last
+            } else {
+                (next - self.last).abs() > 1e-12 * next.abs().max(1.0)
+            };
+            if next >= self.t0 && fresh {
                 self.last = next;
                 return Some(next);
             }
@@ -418,6 +426,13 @@ pub fn integrate(
             }
             k_out += 1;
         }
+    }
+    if columns.iter().any(|c| c.len() != t_out.len()) {
+        return Err(BondError::BadOptions(format!(
+            "output times could not all be reached (got {} of {}); they must be strictly increasing from the start time",
+            columns.first().map_or(0, Vec::len),
+            t_out.len()
+        )));
     }
     for (i, column) in columns.iter().enumerate() {
         if let Some(k) = column.iter().position(|v| !v.is_finite()) {

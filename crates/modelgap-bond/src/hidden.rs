@@ -33,6 +33,9 @@ pub struct HiddenCase {
     pub model: String,
     /// The hidden effects (none for a control case).
     pub hidden: Vec<Hidden>,
+    /// Scale of the input profile (1: the motor's full 12 V). Cogging is a
+    /// low-speed effect: its case runs the motor slowly.
+    pub drive_scale: f64,
 }
 
 /// How the recording is made.
@@ -80,6 +83,7 @@ fn case(name: &str, model: &str, hidden: &[(&str, &[f64])]) -> HiddenCase {
                 values: v.to_vec(),
             })
             .collect(),
+        drive_scale: 1.0,
     }
 }
 
@@ -97,7 +101,10 @@ pub fn cases() -> Vec<HiddenCase> {
             "dc-motor",
             &[("coupling@1m", &[2.0, 2e-4, 1e-4])],
         ),
-        case("cogging", "dc-motor", &[("cogging@1m", &[0.02, 8.0])]),
+        HiddenCase {
+            drive_scale: 0.15,
+            ..case("cogging", "dc-motor", &[("cogging@1m", &[0.01, 8.0])])
+        },
         case("fault", "dc-motor", &[("fault:R", &[1.6, 2.25])]),
         case("saturation", "dc-motor", &[("saturation@L", &[150.0])]),
         case("nothing", "dc-motor", &[]),
@@ -114,7 +121,7 @@ pub fn cases() -> Vec<HiddenCase> {
 /// The input profile: the motor's voltage (or the converter's duty cycle)
 /// steps up, reverses and steps down, so friction, loads and drops that
 /// depend on the direction of motion show their sign.
-pub fn excitation(model: &str, t: &[f64]) -> Vec<(String, Vec<f64>)> {
+pub fn excitation(model: &str, scale: f64, t: &[f64]) -> Vec<(String, Vec<f64>)> {
     let level = |t: f64| -> f64 {
         if t < 0.1 {
             0.0
@@ -146,7 +153,7 @@ pub fn excitation(model: &str, t: &[f64]) -> Vec<(String, Vec<f64>)> {
         )],
         _ => vec![(
             "V".to_string(),
-            t.iter().map(|&t| 12.0 * level(t)).collect(),
+            t.iter().map(|&t| 12.0 * scale * level(t)).collect(),
         )],
     }
 }
@@ -204,7 +211,7 @@ pub fn record(case: &HiddenCase, opts: &RecordingOptions) -> Result<Recording> {
     let (g, changes) = true_system(case)?;
     let n = (opts.duration * opts.rate_hz).round() as usize;
     let t: Vec<f64> = (0..=n).map(|k| k as f64 / opts.rate_hz).collect();
-    let profile = excitation(&case.model, &t);
+    let profile = excitation(&case.model, case.drive_scale, &t);
     let mut inputs = Inputs::new();
     for (name, values) in &profile {
         inputs.set(

@@ -33,9 +33,9 @@ use crate::model::Model;
 use crate::recording::Recording;
 use crate::residual::{FailureWindow, failure_windows, rms};
 
-/// Iterations of the quick fit at each grid start (the best start is then
-/// refined with the full fit).
-const GRID_ITERATIONS: usize = 4;
+/// Finite-difference step, relative to each parameter's scale, of the
+/// linearised step that scores a grid start.
+const GRID_FD_STEP: f64 = 1e-3;
 
 /// Two candidates whose weighted costs differ by less than this fraction are
 /// the same explanation (e.g. "J is off" and "an extra inertia dJ").
@@ -405,6 +405,65 @@ fn prepared(c: &Candidate, rec: &Recording) -> Candidate {
     c
 }
 
+/// One Gauss–Newton step from `x0` (forward differences with absolute
+/// `steps`), clamped to the bounds: returns the cost the linearised model
+/// predicts there (½‖r + J δ‖², never below 0) and the point. Two residual
+/// evaluations per parameter at most; `None` if the start cannot be simulated.
+fn linearised_step(
+    problem: &CandidateProblem,
+    x0: &[f64],
+    steps: &[f64],
+    bounds: &[(f64, f64)],
+) -> Option<(f64, Vec<f64>)> {
+    let m = problem.n_residuals();
+    let k = x0.len();
+    let mut r0 = vec![0.0; m];
+    problem.residuals(x0, &mut r0).ok()?;
+    if r0.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let cost0 = 0.5 * r0.iter().map(|v| v * v).sum::<f64>();
+    if k == 0 {
+        return Some((cost0, Vec::new()));
+    }
+    let mut jac = nalgebra::DMatrix::zeros(m, k);
+    let mut r1 = vec![0.0; m];
+    let mut x = x0.to_vec();
+    for j in 0..k {
+        let h = if x0[j] + steps[j] <= bounds[j].1 {
+            steps[j]
+        } else {
+            -steps[j]
+        };
+        x[j] = x0[j] + h;
+        if problem.residuals(&x, &mut r1).is_err() || r1.iter().any(|v| !v.is_finite()) {
+            return Some((cost0, x0.to_vec()));
+        }
+        x[j] = x0[j];
+        for i in 0..m {
+            jac[(i, j)] = (r1[i] - r0[i]) / h;
+        }
+    }
+    let jt_j = jac.transpose() * &jac;
+    let jt_r = jac.transpose() * nalgebra::DVector::from_column_slice(&r0);
+    let delta = jt_j
+        .clone()
+        .lu()
+        .solve(&(-jt_r))
+        .unwrap_or_else(|| nalgebra::DVector::zeros(k));
+    let x1: Vec<f64> = (0..k)
+        .map(|j| (x0[j] + delta[j]).clamp(bounds[j].0, bounds[j].1))
+        .collect();
+    let d = nalgebra::DVector::from_iterator(k, (0..k).map(|j| x1[j] - x0[j]));
+    let predicted = nalgebra::DVector::from_column_slice(&r0) + &jac * d;
+    let cost1 = 0.5 * predicted.iter().map(|v| v * v).sum::<f64>();
+    Some(if cost1 < cost0 {
+        (cost1, x1)
+    } else {
+        (cost0, x0.to_vec())
+    })
+}
+
 /// Result of fitting one candidate (before scoring).
 struct Fitted {
     candidate: Candidate,
@@ -459,59 +518,43 @@ fn fit_candidate(
         .collect();
     let mut start = c.initial();
     if !grid_axes.is_empty() {
-        let mut best: Option<(f64, Vec<f64>)> = None;
-        let mut combo = vec![0usize; grid_axes.len()];
-        loop {
-            let mut fixed: Vec<Option<f64>> = vec![None; c.params.len()];
-            for (a, (i, pts)) in grid_axes.iter().enumerate() {
-                fixed[*i] = Some(pts[combo[a]]);
-            }
-            let problem = CandidateProblem {
-                target,
-                base,
-                candidate: &c,
-                fixed: fixed.clone(),
-            };
-            let free_idx: Vec<usize> = (0..c.params.len())
-                .filter(|i| fixed[*i].is_none())
+        // Every combination of grid points, scored in parallel by the cost a
+        // linearised step in the free parameters would reach (two
+        // simulations each, no trial step): enough to rank the starts.
+        let mut combos: Vec<Vec<usize>> = vec![Vec::new()];
+        for (_, pts) in &grid_axes {
+            combos = combos
+                .into_iter()
+                .flat_map(|prefix| (0..pts.len()).map(move |k| [prefix.clone(), vec![k]].concat()))
                 .collect();
-            let x0: Vec<f64> = free_idx.iter().map(|&i| c.params[i].initial).collect();
-            let result = if free_idx.is_empty() {
-                let mut out = vec![0.0; problem.n_residuals()];
-                problem
-                    .residuals(&[], &mut out)
-                    .map(|()| (0.5 * out.iter().map(|r| r * r).sum::<f64>(), Vec::new()))
-            } else {
-                let b: Vec<(f64, f64)> = free_idx.iter().map(|&i| bounds[i]).collect();
-                let s: Vec<f64> = free_idx.iter().map(|&i| scales[i]).collect();
-                let mut quick = fit_opts.clone();
-                quick.max_iterations = quick.max_iterations.min(GRID_ITERATIONS);
-                fit(&problem, &x0, &b, &s, &quick, cancel).map(|r| (r.cost_after, r.params))
-            };
-            if let Ok((cost, free)) = result
-                && cost.is_finite()
-                && best.as_ref().is_none_or(|(b, _)| cost < *b)
-            {
-                best = Some((cost, problem.full(&free)));
-            }
-            // Next combination.
-            let mut a = 0;
-            loop {
-                if a == combo.len() {
-                    break;
-                }
-                combo[a] += 1;
-                if combo[a] < grid_axes[a].1.len() {
-                    break;
-                }
-                combo[a] = 0;
-                a += 1;
-            }
-            if a == combo.len() || cancel.is_some_and(Cancel::is_cancelled) {
-                break;
-            }
         }
-        match best {
+        let scored: Vec<(f64, Vec<f64>)> = combos
+            .par_iter()
+            .filter_map(|combo| {
+                if cancel.is_some_and(Cancel::is_cancelled) {
+                    return None;
+                }
+                let mut fixed: Vec<Option<f64>> = vec![None; c.params.len()];
+                for (a, (i, pts)) in grid_axes.iter().enumerate() {
+                    fixed[*i] = Some(pts[combo[a]]);
+                }
+                let problem = CandidateProblem {
+                    target,
+                    base,
+                    candidate: &c,
+                    fixed,
+                };
+                let free_idx: Vec<usize> = (0..c.params.len())
+                    .filter(|i| problem.fixed[*i].is_none())
+                    .collect();
+                let x0: Vec<f64> = free_idx.iter().map(|&i| c.params[i].initial).collect();
+                let steps: Vec<f64> = free_idx.iter().map(|&i| GRID_FD_STEP * scales[i]).collect();
+                let b: Vec<(f64, f64)> = free_idx.iter().map(|&i| bounds[i]).collect();
+                let (cost, free) = linearised_step(&problem, &x0, &steps, &b)?;
+                cost.is_finite().then(|| (cost, problem.full(&free)))
+            })
+            .collect();
+        match scored.into_iter().min_by(|a, b| a.0.total_cmp(&b.0)) {
             Some((_, x)) => start = x,
             None => return failed("no grid start could be simulated".to_string()),
         }

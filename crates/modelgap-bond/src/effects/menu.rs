@@ -159,7 +159,7 @@ fn factor_param(input: &str) -> EffectParam {
 ///   behind a spring `k_s` and damper `c`; adds two states; starts at `J2 =
 ///   J`, a resonance ten times the slowest mode and damping ratio 0.1), and
 ///   on rotational ones `cogging@<j>` (`A_cog · sin(N_cog · θ)`, θ the shaft
-///   angle from the start; `N_cog` in [2, 48] with [`COGGING_GRID`] grid
+///   angle from the start; `N_cog` in [2, 24] with [`COGGING_GRID`] grid
 ///   starts). Translational junctions use `F_c`, `F_0`, `dm`, `m2`.
 /// - On each electrical 1-junction: `brush@<j>` (`v_b` ≥ 0, smoothed with
 ///   the fixed [`CONTACT_SMOOTHING_A`](super::CONTACT_SMOOTHING_A)).
@@ -376,13 +376,22 @@ fn mechanical_candidates(
         ));
     }
     if d == Domain::Rotational {
-        let mut n = param("N_cog", "1", 6.0, (2.0, 48.0), 6.0);
+        let mut n = param("N_cog", "1", 6.0, (2.0, 24.0), 6.0);
         n.grid = COGGING_GRID;
         out.push(mk(
             "cogging",
             format!("cogging torque on {at} (position-dependent)"),
             vec![
-                param("A_cog", eu, 0.1 * e_scale, (-e_peak, e_peak), e_scale),
+                // Cogging is a ripple on the torque, not a load: bounded to a
+                // tenth of the peak effort (a large amplitude also makes every
+                // prediction slow, with the solver following the ripple).
+                param(
+                    "A_cog",
+                    eu,
+                    0.1 * e_scale,
+                    (-0.1 * e_peak, 0.1 * e_peak),
+                    e_scale,
+                ),
                 n,
             ],
         ));

@@ -80,10 +80,10 @@ pub const COULOMB_SMOOTHING_M_S: f64 = 1e-3;
 pub const CONTACT_SMOOTHING_A: f64 = 1e-2;
 
 /// Number of start values the fit tries for the cogging period count
-/// `N_cog` across its bounds [2, 48]: the even counts, since the cogging
+/// `N_cog` across its bounds [2, 24]: the even counts, since the cogging
 /// count of a motor is the least common multiple of its slot and (even)
 /// pole counts. A local fit cannot find a period count from afar.
-pub const COGGING_GRID: usize = 24;
+pub const COGGING_GRID: usize = 12;
 
 /// The physical domain of a 1-junction, from the inertia bonded to it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
