@@ -1,8 +1,6 @@
 //! Seeded Gaussian noise for `simulate --noise`: splitmix64 for the bits, Box–Muller for
 //! the shape. Small, with no dependency, and the same numbers on every platform for a seed.
 
-use std::f64::consts::TAU;
-
 /// `--noise SIGMA[,seed=N]`: white Gaussian noise of standard deviation `sigma` added to
 /// every output, drawn from a generator seeded with `seed`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -38,48 +36,7 @@ pub fn parse_noise(text: &str) -> Result<NoiseSpec, String> {
     Ok(NoiseSpec { sigma, seed })
 }
 
-/// A deterministic standard normal generator.
-#[derive(Clone, Debug)]
-pub struct Gaussian {
-    state: u64,
-    spare: Option<f64>,
-}
-
-impl Gaussian {
-    /// A generator whose sequence is fixed by `seed`.
-    pub fn new(seed: u64) -> Self {
-        Self {
-            state: seed,
-            spare: None,
-        }
-    }
-
-    /// The next 64 random bits (splitmix64, Steele, Lea and Flood 2014).
-    fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// A uniform number in the open interval (0, 1): 53 random bits, offset by half a step.
-    fn uniform(&mut self) -> f64 {
-        const STEP: f64 = 1.0 / (1u64 << 53) as f64;
-        ((self.next_u64() >> 11) as f64 + 0.5) * STEP
-    }
-
-    /// The next standard normal number (mean 0, standard deviation 1).
-    pub fn sample(&mut self) -> f64 {
-        if let Some(z) = self.spare.take() {
-            return z;
-        }
-        let r = (-2.0 * self.uniform().ln()).sqrt();
-        let theta = TAU * self.uniform();
-        self.spare = Some(r * theta.sin());
-        r * theta.cos()
-    }
-}
+pub use modelgap::noise::Gaussian;
 
 /// Adds noise of `spec` to every value of every signal, signal after signal, from one
 /// generator.

@@ -7,6 +7,7 @@
 //! reversing voltage profile and samples it. The nominal model, held
 //! against the recording, must find the hidden effect (or nothing).
 
+use modelgap_core::noise::Gaussian;
 use modelgap_core::{Candidate, Recording, Signal};
 
 use crate::effects;
@@ -158,25 +159,6 @@ pub fn excitation(model: &str, scale: f64, t: &[f64]) -> Vec<(String, Vec<f64>)>
     }
 }
 
-/// splitmix64 + Box–Muller: the same seed gives the same noise everywhere.
-struct Gauss(u64);
-
-impl Gauss {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    fn normal(&mut self) -> f64 {
-        let u1 = self.uniform().max(1e-300);
-        let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-    }
-}
-
 /// The true system of a case: the nominal built-in with the hidden effects.
 ///
 /// # Errors
@@ -230,7 +212,7 @@ pub fn record(case: &HiddenCase, opts: &RecordingOptions) -> Result<Recording> {
         ..SimOptions::default()
     };
     let run = simulate(&g, &inputs, &t, &sim)?;
-    let mut gauss = Gauss(
+    let mut gauss = Gaussian::new(
         opts.seed
             .wrapping_mul(0x2545_F491_4F6C_DD1D)
             .wrapping_add(17),
@@ -253,8 +235,8 @@ pub fn record(case: &HiddenCase, opts: &RecordingOptions) -> Result<Recording> {
             .map(|&v| {
                 lagged = a * lagged + (1.0 - a) * v;
                 coloured =
-                    opts.rho * coloured + (1.0 - opts.rho * opts.rho).sqrt() * gauss.normal();
-                lagged + size * (opts.white * gauss.normal() + opts.coloured * coloured)
+                    opts.rho * coloured + (1.0 - opts.rho * opts.rho).sqrt() * gauss.sample();
+                lagged + size * (opts.white * gauss.sample() + opts.coloured * coloured)
             })
             .collect();
         signals.push(Signal {

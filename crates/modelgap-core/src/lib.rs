@@ -1,5 +1,8 @@
-//! The domain-free core of modelgap: recordings, their CSV and MCAP files, and the
-//! statistics that hold a model's prediction against a measurement.
+//! The domain-free core of modelgap: recordings, their CSV and MCAP files, the
+//! statistics that hold a model's prediction against a measurement, and the
+//! measurement loop itself — [`compare()`] a [`Model`] with a recording,
+//! [`explain()`] which [`Candidate`] effect it is missing, and tell the story
+//! ([`story`], [`report`]).
 //!
 //! A [`Recording`] is a set of named signals on one strictly increasing time axis, checked
 //! when it is built or read (finite values, one value per sample, unique names). The
@@ -30,6 +33,13 @@
 //!
 //! # Modules
 //!
+//! - [`model`]: the [`Model`] trait, the seam every simulator implements, and [`Prediction`].
+//! - [`effect`]: [`Candidate`] effects with their [`EffectParam`]s, and fitted [`Effect`]s.
+//! - [`compare`](mod@compare): residuals, noise floors and failure windows per output.
+//! - [`explain`](mod@explain): the effect-ranking loop — every candidate fitted in
+//!   parallel, ranked by evidence with a noise-robust effective sample size, the verdict
+//!   ("nothing is missing", one or two effects, or a partial explanation).
+//! - [`story`]: the loop's results as text and as the HTML report.
 //! - [`recording`]: [`Recording`] and [`Signal`].
 //! - [`io`]: [`io::csv`] and [`io::mcap`] readers and writers, and
 //!   [`io::read_recording_path`] / [`io::write_recording_path`], which choose by extension.
@@ -40,6 +50,7 @@
 //! - [`fit`]: [`fit::fit`], bounded Levenberg–Marquardt for a [`fit::ResidualProblem`],
 //!   with [`fit::FitOptions`], [`fit::FitReport`] and a [`fit::Cancel`] flag.
 //! - [`report`]: the HTML report page with SVG plots, and the comparison MCAP for Foxglove.
+//! - [`noise`]: a seeded Gaussian generator for recordings made in tests and examples.
 //! - [`math`]: the nalgebra aliases used across modelgap.
 //! - [`error`]: [`CoreError`] and [`Result`].
 
@@ -51,6 +62,7 @@ pub mod fit;
 pub mod io;
 pub mod math;
 pub mod model;
+pub mod noise;
 pub mod recording;
 pub mod report;
 pub mod residual;

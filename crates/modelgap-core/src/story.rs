@@ -134,22 +134,39 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
             .map(|(o, v)| format!("{} {}→{}", o.name, num(o.rms_before), num(*v)))
             .collect();
         let qual = match r.qualitative {
-            Some(true) => "  [signature agrees]",
-            Some(false) => "  [signature disagrees]",
+            Some(true) => "; [signature agrees]",
+            Some(false) => "; [signature disagrees]",
             None => "",
         };
+        // Two lines per candidate: names vary in length, and one line of name,
+        // parameters and RMS runs far past a terminal's width.
         let _ = writeln!(
             s,
-            "  {:>2}. {:<48} score {:>9}  {}  RMS {}{qual}",
+            "  {:>2}. {:<64} score {:>7}",
             i + 1,
             r.candidate.name,
-            num(r.score),
-            params.join(", "),
+            num(r.score)
+        );
+        let _ = writeln!(
+            s,
+            "      {}; RMS {}{qual}",
+            if params.is_empty() {
+                "no parameters".to_string()
+            } else {
+                params.join(", ")
+            },
             rms.join(", ")
         );
         if let Some(e) = &r.error {
             let _ = writeln!(s, "      fit failed: {e}");
         }
+    }
+    if ex.ranked.iter().take(top).any(|r| r.qualitative.is_some()) {
+        let _ = writeln!(
+            s,
+            "  [signature agrees/disagrees]: whether the qualitative diagnosis (fault trees and signatures\n  \
+             of the first deviations) points at the candidate's parameter; a hint, not part of the score"
+        );
     }
     let _ = writeln!(s, "margin to the runner-up: {}", num(ex.margin));
     let _ = writeln!(s, "\nverdict: {}", verdict_sentence(ex));
