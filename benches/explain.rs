@@ -16,7 +16,9 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn explain_benches(c: &mut Criterion) {
     let mut group = c.benchmark_group("explain");
-    group.sample_size(10).measurement_time(Duration::from_secs(10));
+    group
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(10));
     for name in ["load", "nothing", "fault"] {
         let case = cases().into_iter().find(|c| c.name == name).unwrap();
         let rec = record(&case, &RecordingOptions::default()).unwrap();

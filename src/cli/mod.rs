@@ -2,17 +2,25 @@
 //!
 //! Each subcommand sits in its own module and is a library call plus formatting:
 //! [`model`] loads the model every `bond` subcommand takes, [`format`] prints numbers and
-//! matrices, [`noise`] is the seeded Gaussian generator of `simulate --noise`.
+//! matrices, [`noise`] is the seeded Gaussian generator of `simulate --noise`. The
+//! measurement loop is [`compare`], [`explain`] and [`fix`], with what they share (loading a
+//! model with a recording, the progress bar, the report, JSON) in [`report`]; [`demo`] tells
+//! its story on bundled data.
 
 mod arr;
 mod bench;
 mod causality;
+mod compare;
+mod demo;
 mod diagnose;
 mod equations;
+mod explain;
+mod fix;
 mod format;
 mod graph;
 mod model;
 mod noise;
+mod report;
 mod simulate;
 mod table7;
 
@@ -21,7 +29,8 @@ use std::io::Write as _;
 use clap::{Parser, Subcommand};
 use modelgap::{BondError, CoreError};
 
-/// Hold physical models against measurements: bond graphs with fault diagnosis.
+/// Hold physical models against measurements: see where a model fails, learn which physical
+/// effect is missing, add it and watch the error fall; bond graphs with fault diagnosis.
 #[derive(Debug, Parser)]
 #[command(name = "modelgap", version, about, long_about = None)]
 pub struct Cli {
@@ -32,11 +41,18 @@ pub struct Cli {
 /// The top-level commands.
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Hold a model against a recording: error per output, noise floor, failure windows
+    Compare(compare::CompareArgs),
+    /// Name the physical effect the model is missing: candidates fitted, ranked, a verdict
+    Explain(explain::ExplainArgs),
+    /// Add the missing effect: write the new model file and show the error before -> after
+    Fix(fix::FixArgs),
     /// Bond graphs: equations, simulation, causal graph, causality, diagnosis
     #[command(subcommand)]
     Bond(BondCommand),
-    /// Run the main demonstration: the DC-motor paper's Table 7 diagnosis
-    Demo,
+    /// Run the main demonstration: the measurement loop on a bundled motor recording with a
+    /// hidden effect, then the DC-motor paper's Table 7 diagnosis
+    Demo(demo::DemoArgs),
 }
 
 /// The `modelgap bond` subcommands.
@@ -75,7 +91,10 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Bond(BondCommand::Arr(args)) => arr::run(&args),
         Command::Bond(BondCommand::Table7(args)) => table7::run(&args),
         Command::Bond(BondCommand::Bench(args)) => bench::run(&args),
-        Command::Demo => table7::run_demo(),
+        Command::Compare(args) => compare::run(&args),
+        Command::Explain(args) => explain::run(&args),
+        Command::Fix(args) => fix::run(&args),
+        Command::Demo(args) => demo::run(&args),
     }
 }
 

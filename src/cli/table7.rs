@@ -1,15 +1,10 @@
-//! `modelgap bond table7` and `modelgap demo`: the DC-motor paper's Table 7,
-//! every ±20 % fault of the buck converter + motor simulated, detected and
-//! diagnosed, beside the paper's answer.
+//! `modelgap bond table7`: the DC-motor paper's Table 7, every ±20 % fault of the buck
+//! converter + motor simulated, detected and diagnosed, beside the paper's answer (also the
+//! second part of `modelgap demo`).
 
 use anyhow::Context as _;
 use clap::Args;
-use modelgap::bond::CompiledModel;
-use modelgap::bond::diagnosis::{DiagnosisOptions, diagnose};
-use modelgap::bond::library::buck_motor;
-use modelgap::bond::simulate::{Inputs, ParamChange, SimOptions, simulate, time_grid};
 use modelgap::bond::table7::{Table7Options, table7, table7_text};
-use modelgap::{Recording, Signal};
 
 /// Arguments of `modelgap bond table7`.
 #[derive(Debug, Args)]
@@ -71,7 +66,8 @@ pub fn run(args: &Table7Args) -> anyhow::Result<()> {
     super::print(&out)
 }
 
-fn summary(rows: &[modelgap::bond::table7::Table7Row]) -> String {
+/// The summary under the table: how many sets hold the fault and agree with the paper.
+pub fn summary(rows: &[modelgap::bond::table7::Table7Row]) -> String {
     let n = rows.len();
     format!(
         "\n{} of {n} minimal sets contain the true fault; {} equal the paper's; residual behaviour agrees in {} of {n}.\n\
@@ -81,65 +77,4 @@ fn summary(rows: &[modelgap::bond::table7::Table7Row]) -> String {
         rows.iter().filter(|r| r.same_set).count(),
         rows.iter().filter(|r| r.same_behaviour).count(),
     )
-}
-
-/// The main demonstration: one fault followed step by step, then the whole table.
-///
-/// # Errors
-///
-/// Simulation and diagnosis errors (none for the built-in model).
-pub fn run_demo() -> anyhow::Result<()> {
-    let mut out = String::new();
-    out.push_str(
-        "modelgap demo: model-based fault diagnosis of a buck converter feeding a DC motor\n\
-         (Gonzalez Contreras et al., bond graphs; the measurement loop joins this demo next)\n\n",
-    );
-    // 1. One fault, step by step.
-    let g = buck_motor();
-    let model = CompiledModel::new(&g)?;
-    let u0 = model.input_defaults.clone();
-    let x0 = model
-        .steady_state(&u0, None)
-        .context("steady state of the buck-motor")?;
-    let t = time_grid(2.0, 1000.0);
-    let r_nominal = g.param("R")?;
-    let sim = SimOptions {
-        initial_state: Some(x0),
-        changes: vec![ParamChange {
-            at: 0.5,
-            name: "R".to_string(),
-            value: 1.2 * r_nominal,
-        }],
-        ..SimOptions::default()
-    };
-    let run = simulate(&g, &Inputs::new(), &t, &sim).context("simulating the R fault")?;
-    let mut signals = Vec::new();
-    for name in ["i", "omega"] {
-        if let Some(y) = run.output(name) {
-            signals.push(Signal {
-                name: name.to_string(),
-                values: y.to_vec(),
-            });
-        }
-    }
-    let rec = Recording::new(t, signals)?;
-    let opts = DiagnosisOptions {
-        steady_start: true,
-        persistence: 1,
-        ..DiagnosisOptions::default()
-    };
-    let diag = diagnose(&g, &rec, &opts).context("diagnosing the R fault")?;
-    out.push_str("1. The armature resistance R rises 20 % at t = 0.5 s. The parallel model runs beside the\n   process; residuals leave the paper's 2 % band:\n\n");
-    for line in diag.report().lines() {
-        out.push_str("   ");
-        out.push_str(line);
-        out.push('\n');
-    }
-    // 2. The whole table.
-    out.push_str("\n2. Every fault of the paper's Table 7, engine beside paper:\n\n");
-    let rows = table7(&Table7Options::default()).context("running the Table 7 faults")?;
-    out.push_str(&table7_text(&rows));
-    out.push_str(&summary(&rows));
-    out.push_str("\nNext: `modelgap bond table7 --json`, `modelgap bond equations --model dc-motor`, `modelgap bond arr --model buck-motor`.\n");
-    super::print(&out)
 }

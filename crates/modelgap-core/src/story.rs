@@ -218,25 +218,43 @@ pub fn build_report(
         ));
     }
     let verdict = explanation.map_or_else(
-        || "Comparison only: run explain to find what is missing.".to_string(),
+        || {
+            if before.outputs.iter().all(|o| o.windows.is_empty()) {
+                "Comparison only: the model never leaves its noise band.".to_string()
+            } else {
+                "Comparison only: the model fails where shaded below; run explain to find what is missing."
+                    .to_string()
+            }
+        },
         verdict_sentence,
     );
     let mut table = vec![vec![
         "output".to_string(),
         "noise floor".to_string(),
         "RMS before".to_string(),
-        "RMS after".to_string(),
-        "after / floor".to_string(),
     ]];
+    if after.is_some() {
+        table[0].extend(["RMS after".to_string(), "after / floor".to_string()]);
+    } else {
+        table[0].push("RMS / floor".to_string());
+    }
     for o in &before.outputs {
-        let after_rms = after.and_then(|a| a.output(&o.name)).map(|a| a.stats.rms);
-        table.push(vec![
+        let mut row = vec![
             format!("{} ({})", o.name, o.unit),
             num(o.noise_floor),
             num(o.stats.rms),
-            after_rms.map_or("—".to_string(), num),
-            after_rms.map_or("—".to_string(), |r| format!("{:.2}", r / o.noise_floor)),
-        ]);
+        ];
+        match after {
+            Some(a) => {
+                let after_rms = a.output(&o.name).map(|a| a.stats.rms);
+                row.push(after_rms.map_or("—".to_string(), num));
+                row.push(
+                    after_rms.map_or("—".to_string(), |r| format!("{:.2}", r / o.noise_floor)),
+                );
+            }
+            None => row.push(format!("{:.2}", o.rms_over_floor())),
+        }
+        table.push(row);
     }
     if let Some(ex) = explanation {
         for c in &ex.chosen {
@@ -257,11 +275,32 @@ pub fn build_report(
                     }
                 })
                 .collect();
+            // Names often say where already ("Coulomb friction on the shaft (1m)").
+            let place = if c.candidate.name.contains(&c.candidate.acts_on) {
+                String::new()
+            } else {
+                format!(" (acts on {})", c.candidate.acts_on)
+            };
             summary.push(format!(
-                "Chosen effect: {} (acts on {}), {}.",
+                "Chosen effect: {}{place}, {}.",
                 c.candidate.name,
-                c.candidate.acts_on,
                 params.join(", ")
+            ));
+        }
+    }
+    if let Some(a) = after {
+        for o in &a.outputs {
+            summary.push(format!(
+                "{} with the effect added: RMS error {} {} ({:.1}× the noise floor){}.",
+                o.name,
+                num(o.stats.rms),
+                o.unit,
+                o.rms_over_floor(),
+                if o.windows.is_empty() {
+                    ", never leaving its band".to_string()
+                } else {
+                    format!(", still leaving its band in {} window(s)", o.windows.len())
+                }
             ));
         }
     }
@@ -321,7 +360,7 @@ pub fn build_report(
         series,
         residuals,
         ranking,
-        ranking_unit: "evidence (BIC difference)".to_string(),
+        ranking_unit: "BIC evidence, with a penalty per fitted parameter".to_string(),
         extra_svgs: Vec::new(),
     }
 }

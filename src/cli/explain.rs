@@ -1,0 +1,109 @@
+//! `modelgap explain`: which physical effect is the model missing? Fits every candidate
+//! effect the model offers against the recording, ranks them by evidence and gives the
+//! verdict — nothing missing, one effect, two on top of each other, or a partial
+//! explanation — as text, JSON or a report.
+
+use clap::Args;
+use modelgap::Model as _;
+use modelgap::story::explanation_text;
+use modelgap::{Comparison, Explanation, Verdict};
+use serde_json::json;
+
+use super::report::{
+    Loaded, LoopArgs, ReportParts, args_text, data_name, explanation_json, json_text, load_loop,
+    print_notes, report_line, run_compare, run_explain, write_report,
+};
+
+/// Arguments of `modelgap explain`.
+#[derive(Debug, Args)]
+pub struct ExplainArgs {
+    #[command(flatten)]
+    pub common: LoopArgs,
+
+    /// Print the explanation as JSON: the verdict, per output the noise floor and RMS before
+    /// and after, the ranked candidates with fitted parameters, and the chosen effects
+    #[arg(long)]
+    pub json: bool,
+
+    /// How many ranked candidates to print
+    #[arg(long, value_name = "N", default_value_t = 8)]
+    pub top: usize,
+}
+
+/// Explains the recording and prints the ranking and the verdict (and writes the report
+/// with `--report`).
+///
+/// # Errors
+///
+/// Model and recording errors (see [`super::report::load_loop`]), a model that cannot
+/// simulate the recording, a report that cannot be written.
+pub fn run(args: &ExplainArgs) -> anyhow::Result<()> {
+    let loaded = load_loop(&args.common)?;
+    if !args.json {
+        print_notes(&loaded.notes);
+    }
+    let ex = run_explain(&loaded, args.json)?;
+    let page = match &args.common.report {
+        Some(dir) => {
+            let (before, after) = before_after(&loaded, &ex)?;
+            Some(write_report(
+                dir,
+                ReportParts {
+                    before: &before,
+                    explanation: Some(&ex),
+                    after: after.as_ref(),
+                    data: &data_name(&args.common.data),
+                    verdict: None,
+                },
+            )?)
+        }
+        None => None,
+    };
+    if args.json {
+        let mut value = explanation_json(&ex);
+        value["data"] = json!(args.common.data.display().to_string());
+        value["notes"] = json!(loaded.notes);
+        if let Some(page) = &page {
+            value["report"] = json!(page.display().to_string());
+        }
+        return super::print(&json_text(&value)?);
+    }
+    let mut out = format!(
+        "model {} explaining {} ({} candidate effects fitted)\n",
+        ex.model,
+        args.common.data.display(),
+        ex.ranked.len()
+    );
+    out.push_str(&explanation_text(&ex, args.top));
+    if let Some(page) = &page {
+        out.push_str(&report_line(page));
+    }
+    if ex.verdict != Verdict::NothingMissing {
+        out.push_str(&format!(
+            "next: `modelgap fix {} --out {}-fixed.toml` adds it to the model and shows the error fall\n",
+            args_text(&args.common),
+            ex.model
+        ));
+    }
+    super::print(&out)
+}
+
+/// The comparison of the model as given and, when effects were chosen, of the model with
+/// them built in.
+///
+/// # Errors
+///
+/// The model cannot simulate the recording, or the effects cannot be built in.
+pub fn before_after(
+    loaded: &Loaded,
+    ex: &Explanation,
+) -> anyhow::Result<(Comparison, Option<Comparison>)> {
+    let before = run_compare(&loaded.model, loaded)?;
+    let effects = ex.effects();
+    if effects.is_empty() {
+        return Ok((before, None));
+    }
+    let fixed = loaded.model.with_effects(&effects)?;
+    let after = run_compare(fixed.as_ref(), loaded)?;
+    Ok((before, Some(after)))
+}

@@ -1,0 +1,283 @@
+//! `modelgap fix`: add the missing effect to the model. Explains the recording (or takes
+//! the candidate the user names with `--effect`), builds the effect into the model, writes
+//! the new model file, and compares both models with the recording so the error is seen to
+//! fall.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+use clap::Args;
+use modelgap::bond::file::read_model_path;
+use modelgap::report::format_number as num;
+use modelgap::story::{explanation_text, verdict_sentence};
+use modelgap::{Effect, EffectKind, Explanation, Model as _, RankedCandidate, Verdict};
+
+use super::BadInput;
+use super::report::{
+    LoopArgs, ReportParts, args_text_with_model, before_after_text, data_name, load_loop,
+    print_notes, report_line, run_compare, run_explain, write_report,
+};
+
+/// Arguments of `modelgap fix`.
+#[derive(Debug, Args)]
+pub struct FixArgs {
+    #[command(flatten)]
+    pub common: LoopArgs,
+
+    /// Add this candidate instead of explain's choice: its rank N (1 = the best) or its id
+    /// (`coulomb@1m`, `deviation:R`)
+    #[arg(long, value_name = "N|ID")]
+    pub effect: Option<String>,
+
+    /// Write the model with the effect(s) here (a bond-graph .toml); never the input model
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+
+    /// How many ranked candidates to print
+    #[arg(long, value_name = "N", default_value_t = 5)]
+    pub top: usize,
+}
+
+/// Which candidate `--effect` names.
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum Pick {
+    /// A rank, from 1.
+    Rank(usize),
+    /// A candidate id.
+    Id(String),
+}
+
+impl Pick {
+    fn parse(text: &str) -> Pick {
+        match text.trim().parse::<usize>() {
+            Ok(n) => Pick::Rank(n),
+            Err(_) => Pick::Id(text.trim().to_owned()),
+        }
+    }
+}
+
+/// Explains, adds the effect(s), writes the new model and prints the error before → after.
+///
+/// # Errors
+///
+/// Model and recording errors; [`BadInput`] for an `--effect` that names no candidate, an
+/// `--out` that is the input model; a model that cannot simulate the recording or take the
+/// effect; a file that cannot be written.
+pub fn run(args: &FixArgs) -> anyhow::Result<()> {
+    let loaded = load_loop(&args.common)?;
+    check_out(&args.out, loaded.model_file.as_deref())?;
+    let candidates = loaded.model.candidates();
+    let pick = args.effect.as_deref().map(Pick::parse);
+    match &pick {
+        Some(Pick::Rank(n)) if *n == 0 || *n > candidates.len() => {
+            return Err(BadInput(format!(
+                "--effect {n}: model {} offers {} candidate effects, ranked 1 to {}",
+                loaded.model.name(),
+                candidates.len(),
+                candidates.len()
+            ))
+            .into());
+        }
+        Some(Pick::Id(id)) if !candidates.iter().any(|c| &c.id == id) => {
+            return Err(BadInput(format!(
+                "--effect {id}: model {} offers no candidate with that id; its candidates are {}",
+                loaded.model.name(),
+                candidates
+                    .iter()
+                    .map(|c| c.id.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ))
+            .into());
+        }
+        _ => {}
+    }
+    print_notes(&loaded.notes);
+    let ex = run_explain(&loaded, false)?;
+    let mut out = format!(
+        "model {} explaining {} ({} candidate effects fitted)\n",
+        ex.model,
+        args.common.data.display(),
+        ex.ranked.len()
+    );
+    out.push_str(&explanation_text(&ex, args.top));
+
+    // What to add: explain's choice, or the user's pick.
+    let (added, shown, verdict_override) = match &pick {
+        None => (ex.chosen.clone(), ex.clone(), None),
+        Some(p) => {
+            let (rank, r) = picked(&ex, p)?;
+            if let Some(e) = &r.error {
+                anyhow::bail!(
+                    "the fit of {} (--effect {}) failed, so it cannot be added: {e}",
+                    r.candidate.name,
+                    args.effect.as_deref().unwrap_or_default()
+                );
+            }
+            let mut shown = ex.clone();
+            shown.chosen = vec![r.clone()];
+            let verdict = format!(
+                "Added by hand (--effect): {}, ranked {rank} of {}. explain's own verdict: {}",
+                r.candidate.name,
+                ex.ranked.len(),
+                verdict_sentence(&ex)
+            );
+            (vec![r.clone()], shown, Some(verdict))
+        }
+    };
+    if added.is_empty() {
+        out.push_str(&format!(
+            "\nnothing to add ({}): {} not written\n",
+            ex.verdict,
+            args.out.display()
+        ));
+        return super::print(&out);
+    }
+    if pick.is_none() && ex.verdict == Verdict::Partial {
+        out.push_str(
+            "\nnote: a partial explanation: the effect below lowers the error but does not \
+             reach the noise floor\n",
+        );
+    }
+    let effects: Vec<Effect> = added.iter().map(RankedCandidate::effect).collect();
+    let fixed = loaded
+        .model
+        .with_effects(&effects)
+        .context("building the effect into the model")?;
+    let text = fixed.to_file_text().ok_or_else(|| {
+        BadInput(format!(
+            "model {} is not file-based: there is no model file to write",
+            loaded.model.name()
+        ))
+    })?;
+    std::fs::write(&args.out, &text)
+        .with_context(|| format!("writing the new model to {}", args.out.display()))?;
+    read_model_path(&args.out).with_context(|| {
+        format!(
+            "the model written to {} does not read back (a bug; please report it)",
+            args.out.display()
+        )
+    })?;
+
+    out.push('\n');
+    for r in &added {
+        out.push_str(&format!("added: {}\n", effect_line(r)));
+        if r.candidate.kind == EffectKind::AbruptChange {
+            out.push_str(
+                "note: an abrupt change happens during a run: the model file records it as a \
+                 `# fault:` comment, and a model read from the file does not make it\n",
+            );
+        }
+    }
+    out.push_str(&format!("wrote {}\n", args.out.display()));
+    let before = run_compare(&loaded.model, &loaded)?;
+    let after = run_compare(fixed.as_ref(), &loaded)?;
+    out.push_str("error before → after:\n");
+    out.push_str(&before_after_text(&before, &after));
+    if let Some(dir) = &args.common.report {
+        let page = write_report(
+            dir,
+            ReportParts {
+                before: &before,
+                explanation: Some(&shown),
+                after: Some(&after),
+                data: &data_name(&args.common.data),
+                verdict: verdict_override,
+            },
+        )?;
+        out.push_str(&report_line(&page));
+    }
+    out.push_str(&format!(
+        "next: `modelgap compare {}` holds the new model against the recording\n",
+        args_text_with_model(&args.common, Some(&args.out))
+    ));
+    super::print(&out)
+}
+
+/// The candidate `--effect` names, with its rank from 1.
+///
+/// # Errors
+///
+/// [`BadInput`] when the rank or id is not in the ranking.
+fn picked<'a>(ex: &'a Explanation, pick: &Pick) -> anyhow::Result<(usize, &'a RankedCandidate)> {
+    let found = match pick {
+        Pick::Rank(n) => n
+            .checked_sub(1)
+            .and_then(|i| ex.ranked.get(i))
+            .map(|r| (*n, r)),
+        Pick::Id(id) => ex
+            .ranked
+            .iter()
+            .enumerate()
+            .find(|(_, r)| &r.candidate.id == id)
+            .map(|(i, r)| (i + 1, r)),
+    };
+    found.ok_or_else(|| {
+        BadInput(format!(
+            "--effect: no such candidate in the ranking of {} candidates",
+            ex.ranked.len()
+        ))
+        .into()
+    })
+}
+
+/// A fitted effect in one line: name, where it acts, parameters ± standard error.
+pub fn effect_line(r: &RankedCandidate) -> String {
+    let params: Vec<String> = r
+        .params
+        .iter()
+        .map(|p| {
+            if p.std_error.is_finite() {
+                format!(
+                    "{} = {} ± {} {}",
+                    p.name,
+                    num(p.value),
+                    num(p.std_error),
+                    p.unit
+                )
+            } else {
+                format!("{} = {} {} (at a bound)", p.name, num(p.value), p.unit)
+            }
+        })
+        .collect();
+    // Names often say where already: "Coulomb friction on the shaft (1m)".
+    if r.candidate.name.contains(&r.candidate.acts_on) {
+        format!("{}: {}", r.candidate.name, params.join(", "))
+    } else {
+        format!(
+            "{} (acts on {}): {}",
+            r.candidate.name,
+            r.candidate.acts_on,
+            params.join(", ")
+        )
+    }
+}
+
+/// Refuses an `--out` that is the input model file or a directory.
+///
+/// # Errors
+///
+/// [`BadInput`] naming the path.
+fn check_out(out: &Path, model_file: Option<&Path>) -> anyhow::Result<()> {
+    if out.is_dir() {
+        return Err(BadInput(format!(
+            "--out {} is a directory: give the new model file's name",
+            out.display()
+        ))
+        .into());
+    }
+    if let (Some(model), true) = (model_file, out.exists()) {
+        let same = match (std::fs::canonicalize(model), std::fs::canonicalize(out)) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => false,
+        };
+        if same {
+            return Err(BadInput(format!(
+                "--out {} is the input model file: write the new model to another file",
+                out.display()
+            ))
+            .into());
+        }
+    }
+    Ok(())
+}
