@@ -409,3 +409,40 @@ fn demo_tells_the_story_and_writes_the_report() {
     assert!(html.contains("<svg") && html.contains("Coulomb friction"));
     assert!(Path::new(&report).join("comparison.mcap").exists());
 }
+
+/// `--band-fraction` replaces the noise band by the paper's fraction of the steady state.
+#[test]
+fn compare_takes_the_papers_band() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_modelgap"))
+        .args([
+            "compare",
+            "--model",
+            "dc-motor",
+            "--steady-start",
+            "--band-fraction",
+            "0.02",
+            "--json",
+            "--data",
+        ])
+        .arg(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/examples/data/dc_motor_r_fault.csv"
+        ))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    // 2 % of omega's steady state (239 rad/s) is 4.78 rad/s.
+    let omega = json["outputs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|o| o["name"] == "omega")
+        .unwrap();
+    let band = omega["band"].as_f64().unwrap();
+    assert!((band - 0.02 * 239.04).abs() < 0.05, "band {band}");
+}

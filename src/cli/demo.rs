@@ -84,6 +84,8 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         rec,
         noise: Default::default(),
         notes: Vec::new(),
+        band_sigmas: modelgap::CompareOptions::default().band_sigmas,
+        band_fraction: None,
     };
     let rec = &loaded.rec;
 

@@ -61,6 +61,20 @@ pub struct LoopArgs {
     /// (for Foxglove)
     #[arg(long, value_name = "DIR")]
     pub report: Option<PathBuf>,
+
+    /// Failure band: this many noise floors around zero (default 4)
+    #[arg(
+        long,
+        value_name = "K",
+        default_value_t = 4.0,
+        conflicts_with = "band_fraction"
+    )]
+    pub band_sigmas: f64,
+
+    /// Failure band: this fraction of each output's steady state instead (the DC-motor
+    /// paper's threshold is 0.02)
+    #[arg(long, value_name = "F")]
+    pub band_fraction: Option<f64>,
 }
 
 /// How recorded inputs are held between samples (`--hold`).
@@ -106,6 +120,10 @@ pub struct Loaded {
     pub noise: BTreeMap<String, f64>,
     /// Findings worth telling the user (a model input the recording lacks).
     pub notes: Vec<String>,
+    /// The failure band, in noise floors.
+    pub band_sigmas: f64,
+    /// The failure band as a fraction of the steady state, when chosen.
+    pub band_fraction: Option<f64>,
 }
 
 impl Loaded {
@@ -113,6 +131,8 @@ impl Loaded {
     pub fn compare_options(&self) -> CompareOptions {
         CompareOptions {
             noise: self.noise.clone(),
+            band_sigmas: self.band_sigmas,
+            band_fraction: self.band_fraction,
             ..CompareOptions::default()
         }
     }
@@ -150,12 +170,26 @@ pub fn load_loop(args: &LoopArgs) -> anyhow::Result<Loaded> {
         .map(|a| (a.name.clone(), a.value))
         .collect();
     let notes = check_fit(&model, &rec, &noise, path)?;
+    if !(args.band_sigmas.is_finite() && args.band_sigmas > 0.0) {
+        return Err(BadInput(format!(
+            "--band-sigmas must be positive, found {}",
+            args.band_sigmas
+        ))
+        .into());
+    }
+    if let Some(f) = args.band_fraction
+        && !(f.is_finite() && f > 0.0)
+    {
+        return Err(BadInput(format!("--band-fraction must be positive, found {f}")).into());
+    }
     Ok(Loaded {
         model,
         model_file,
         rec,
         noise,
         notes,
+        band_sigmas: args.band_sigmas,
+        band_fraction: args.band_fraction,
     })
 }
 
@@ -306,6 +340,20 @@ pub fn run_explain(loaded: &Loaded, quiet: bool) -> anyhow::Result<Explanation> 
             }
         })),
         ..ExplainOptions::default()
+    };
+    // Ctrl-C stops the fits between candidates; what was found so far is kept
+    // and reported (a second Ctrl-C ends the process).
+    let cancel = Arc::new(modelgap::fit::Cancel::new());
+    let on_interrupt = cancel.clone();
+    let _ = ctrlc::set_handler(move || {
+        if on_interrupt.is_cancelled() {
+            std::process::exit(130);
+        }
+        on_interrupt.cancel();
+    });
+    let opts = ExplainOptions {
+        cancel: Some(cancel),
+        ..opts
     };
     let result = explain(&loaded.model, &loaded.rec, &opts);
     bar.finish_and_clear();
