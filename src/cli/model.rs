@@ -5,19 +5,12 @@ use std::path::Path;
 
 use anyhow::Context as _;
 use clap::Args;
+use modelgap::bond::BondGraph;
 use modelgap::bond::compiled::CompiledModel;
 use modelgap::bond::file::read_model_path;
 use modelgap::bond::library::{self, BUILTINS};
-use modelgap::bond::{BondGraph, StateSpace};
 
 use super::BadInput;
-
-/// Newton iterations allowed to find a steady state (a linear model needs one).
-const STEADY_MAX_ITERATIONS: usize = 50;
-
-/// A steady state is reached when every state derivative is below this, relative to the
-/// state's own scale (`max(|x|, 1)`), per second.
-const STEADY_TOLERANCE: f64 = 1e-10;
 
 /// Which model to use and which of its values to change.
 #[derive(Debug, Args)]
@@ -113,9 +106,8 @@ fn looks_like_path(text: &str) -> bool {
     text.contains('/') || text.contains('\\') || text.to_ascii_lowercase().ends_with(".toml")
 }
 
-/// The steady state of `g` under constant inputs `u` (in the model's input order): Newton's
-/// method on `ẋ = f(x, u) = 0` from rest, with the Jacobian of the linearisation. Exact after
-/// one step for a model that is affine in its states.
+/// The steady state of `g` under constant inputs `u` (in the model's input order), by
+/// Newton's method ([`CompiledModel::steady_state`]).
 ///
 /// # Errors
 ///
@@ -123,37 +115,9 @@ fn looks_like_path(text: &str) -> bool {
 /// such as a free integrator, or no convergence).
 pub fn steady_state(g: &BondGraph, u: &[f64]) -> anyhow::Result<Vec<f64>> {
     let model = CompiledModel::new(g)?;
-    let n = model.n_states();
-    let mut x = vec![0.0; n];
-    let mut dx = vec![0.0; n];
-    let mut scratch = model.scratch();
-    for _ in 0..STEADY_MAX_ITERATIONS {
-        model.eval(0.0, &x, u, &mut scratch);
-        model.read_derivatives(&scratch, &mut dx);
-        let converged = x
-            .iter()
-            .zip(&dx)
-            .all(|(xi, di)| di.abs() <= STEADY_TOLERANCE * xi.abs().max(1.0));
-        if converged {
-            return Ok(x);
-        }
-        let ss = StateSpace::of_compiled(&model, Some(&x), Some(u));
-        let rhs = modelgap::math::DVector::from_column_slice(&dx);
-        let step = ss.a.lu().solve(&rhs).ok_or_else(|| {
-            BadInput(format!(
-                "model {} has no steady state: its state matrix is singular (a free integrator?)",
-                g.name
-            ))
-        })?;
-        for (xi, si) in x.iter_mut().zip(step.iter()) {
-            *xi -= si;
-        }
-    }
-    Err(BadInput(format!(
-        "no steady state of model {} found in {STEADY_MAX_ITERATIONS} Newton steps",
-        g.name
-    ))
-    .into())
+    model
+        .steady_state(u, None)
+        .map_err(|e| BadInput(format!("model {} has no steady state: {e}", g.name)).into())
 }
 
 /// The outputs of `g` at state `x` and inputs `u`, in the model's output order.
