@@ -42,6 +42,7 @@
 //! - [`Error`], [`Result`]: one error type over the workspace's crates.
 
 pub use modelgap_bond as bond;
+pub use modelgap_cloth as cloth;
 pub use modelgap_core::residual::{FailureWindow, NoiseFloor, Residual, ResidualStats, Threshold};
 pub use modelgap_core::{
     Candidate, CompareOptions, Comparison, CoreError, Effect, EffectKind, EffectParam,

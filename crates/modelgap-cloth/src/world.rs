@@ -1,0 +1,380 @@
+//! The cloth world: particles, constraints, colliders, and the step.
+
+use std::ops::Range;
+
+use nalgebra::Vector3;
+
+use crate::constraints::DistanceConstraints;
+use crate::contact::{self, Collider, ColliderId, ContactState};
+use crate::error::{ClothError, Result};
+use crate::mesh::{BuildMesh, ClothMesh};
+use crate::newton::NewtonSolver;
+use crate::particles::{ParticleId, ParticleSet};
+use crate::solver::{self, Method, SolverParams, StepReport};
+
+/// The id of a cloth in a [`ClothWorld`], handed out by [`ClothWorld::add_cloth`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct ClothId(pub u32);
+
+/// Where a cloth's particles and constraints live in the world's columns.
+#[derive(Clone, Debug)]
+struct ClothEntry {
+    particles: Range<usize>,
+    constraints: Range<usize>,
+    triangles: Vec<[u32; 3]>,
+}
+
+/// Scratch memory of a step, cleared and reused, never dropped mid-run.
+#[derive(Debug, Default)]
+struct SolverWorkspace {
+    pred: Vec<Vector3<f64>>,
+    free: Vec<Vector3<f64>>,
+    mu: Vec<f64>,
+    contacts: Vec<ContactState>,
+    last_dt: Option<f64>,
+    newton: Option<NewtonSolver>,
+}
+
+/// All cloths and colliders of a simulation, stepped together.
+///
+/// # Example
+/// ```
+/// use modelgap_cloth::{ClothWorld, GridCloth, SolverParams};
+/// let mut world = ClothWorld::new(SolverParams::default());
+/// let cloth = world.add_cloth(GridCloth::new(10, 10, 0.05).pin(0).pin(9))?;
+/// let report = world.step(0.01)?;
+/// assert!(report.max_stretch.is_finite());
+/// assert_eq!(world.positions(cloth).len(), 100);
+/// # Ok::<(), modelgap_cloth::ClothError>(())
+/// ```
+#[derive(Debug)]
+pub struct ClothWorld {
+    params: SolverParams,
+    particles: ParticleSet,
+    constraints: DistanceConstraints,
+    cloths: Vec<ClothEntry>,
+    colliders: Vec<Collider>,
+    workspace: SolverWorkspace,
+    time: f64,
+}
+
+impl ClothWorld {
+    /// An empty world with the given solver parameters.
+    #[must_use]
+    pub fn new(params: SolverParams) -> Self {
+        Self {
+            params,
+            particles: ParticleSet::new(),
+            constraints: DistanceConstraints::new(),
+            cloths: Vec::new(),
+            colliders: Vec::new(),
+            workspace: SolverWorkspace::default(),
+            time: 0.0,
+        }
+    }
+
+    /// Adds a cloth: a particle per vertex (pinned vertices static), a
+    /// distance constraint per edge with its current length as rest length.
+    ///
+    /// # Errors
+    /// The mesh's own errors ([`ClothMesh::check`]): an empty mesh, a
+    /// zero-length edge, an edge between two static particles, a non-finite
+    /// position, a vertex out of range.
+    pub fn add_cloth(&mut self, cloth: impl BuildMesh) -> Result<ClothId> {
+        let mesh: ClothMesh = cloth.build_mesh()?;
+        mesh.check()?;
+        let first = self.particles.len();
+        for (v, (x, m)) in mesh.positions.iter().zip(&mesh.masses).enumerate() {
+            let pinned = mesh.pinned.binary_search(&(v as u32)).is_ok();
+            self.particles.push(*x, if pinned { 0.0 } else { 1.0 / m });
+        }
+        let first_constraint = self.constraints.len();
+        for &[a, b] in &mesh.edges {
+            let rest = (mesh.positions[a as usize] - mesh.positions[b as usize]).norm();
+            self.constraints
+                .push(first as u32 + a, first as u32 + b, rest);
+        }
+        let id = ClothId(self.cloths.len() as u32);
+        self.cloths.push(ClothEntry {
+            particles: first..self.particles.len(),
+            constraints: first_constraint..self.constraints.len(),
+            triangles: mesh.triangles,
+        });
+        self.topology_changed();
+        Ok(id)
+    }
+
+    /// Adds a static collider.
+    pub fn add_collider(&mut self, collider: Collider) -> ColliderId {
+        self.colliders.push(collider);
+        ColliderId(self.colliders.len() as u32 - 1)
+    }
+
+    /// The solver parameters.
+    #[must_use]
+    pub fn params(&self) -> &SolverParams {
+        &self.params
+    }
+
+    /// The solver parameters, to change between steps (method, tolerance, limits).
+    pub fn params_mut(&mut self) -> &mut SolverParams {
+        &mut self.params
+    }
+
+    /// All particles of the world (every cloth's, in the order added).
+    #[must_use]
+    pub fn particles(&self) -> &ParticleSet {
+        &self.particles
+    }
+
+    /// All particles, to edit positions or velocities between steps (a
+    /// disturbance, a scrambled state). Masses may change but not between
+    /// static and dynamic (that is a topology change: add the cloth again).
+    pub fn particles_mut(&mut self) -> &mut ParticleSet {
+        &mut self.particles
+    }
+
+    /// All distance constraints of the world.
+    #[must_use]
+    pub fn constraints(&self) -> &DistanceConstraints {
+        &self.constraints
+    }
+
+    /// The colliders.
+    #[must_use]
+    pub fn colliders(&self) -> &[Collider] {
+        &self.colliders
+    }
+
+    /// Simulated time (s).
+    #[must_use]
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// The positions of a cloth's particles (m), in its mesh's vertex order;
+    /// empty for an id this world did not hand out.
+    #[must_use]
+    pub fn positions(&self, cloth: ClothId) -> &[Vector3<f64>] {
+        self.range(cloth)
+            .map_or(&[], |r| &self.particles.positions[r])
+    }
+
+    /// The velocities of a cloth's particles (m/s); empty for an unknown id.
+    #[must_use]
+    pub fn velocities(&self, cloth: ClothId) -> &[Vector3<f64>] {
+        self.range(cloth)
+            .map_or(&[], |r| &self.particles.velocities[r])
+    }
+
+    /// The world id of a cloth's vertex.
+    ///
+    /// # Errors
+    /// [`ClothError::UnknownCloth`] or [`ClothError::VertexOutOfRange`].
+    pub fn particle(&self, cloth: ClothId, vertex: usize) -> Result<ParticleId> {
+        let r = self.range(cloth).ok_or(ClothError::UnknownCloth {
+            id: cloth.0,
+            n_cloths: self.cloths.len(),
+        })?;
+        if vertex >= r.len() {
+            return Err(ClothError::VertexOutOfRange {
+                vertex,
+                n_vertices: r.len(),
+            });
+        }
+        Ok(ParticleId((r.start + vertex) as u32))
+    }
+
+    /// A cloth's triangles (vertex indices of its mesh); empty for an unknown id.
+    #[must_use]
+    pub fn triangles(&self, cloth: ClothId) -> &[[u32; 3]] {
+        self.cloths
+            .get(cloth.0 as usize)
+            .map_or(&[], |c| &c.triangles)
+    }
+
+    /// The largest relative stretch of a cloth's constraints now (0 for an unknown id).
+    #[must_use]
+    pub fn max_stretch(&self, cloth: ClothId) -> f64 {
+        let Some(c) = self.cloths.get(cloth.0 as usize) else {
+            return 0.0;
+        };
+        let mut worst = 0.0_f64;
+        for i in c.constraints.clone() {
+            let s = self.constraints.stretch(i, &self.particles.positions).abs();
+            if s.is_nan() {
+                return f64::NAN;
+            }
+            worst = worst.max(s);
+        }
+        worst
+    }
+
+    fn range(&self, cloth: ClothId) -> Option<Range<usize>> {
+        self.cloths
+            .get(cloth.0 as usize)
+            .map(|c| c.particles.clone())
+    }
+
+    fn topology_changed(&mut self) {
+        self.workspace.newton = None;
+        self.workspace.mu.clear();
+        self.workspace.mu.resize(self.constraints.len(), 0.0);
+        self.workspace.last_dt = None;
+    }
+
+    /// Advances the world by `dt` seconds.
+    ///
+    /// # Errors
+    /// [`ClothError::BadTimeStep`] for a non-positive or non-finite `dt`,
+    /// [`ClothError::NonFinite`] when a position or velocity is NaN or
+    /// infinite (set through [`particles_mut`](Self::particles_mut)). Not
+    /// converging within the iteration limit is reported in the
+    /// [`StepReport`], not an error.
+    pub fn step(&mut self, dt: f64) -> Result<StepReport> {
+        if !(dt > 0.0 && dt.is_finite()) {
+            return Err(ClothError::BadTimeStep { dt });
+        }
+        self.check_finite()?;
+        let h = dt;
+        let g = self.params.gravity;
+        let n = self.particles.len();
+        let ws = &mut self.workspace;
+        let ps = &mut self.particles;
+        let cs = &self.constraints;
+        ws.pred.clear();
+        ws.contacts.clear();
+        ws.contacts.resize(n, ContactState::default());
+        for i in 0..n {
+            let x = ps.positions[i];
+            ws.pred.push(if ps.inv_mass[i] > 0.0 {
+                x + h * ps.velocities[i] + 0.5 * h * h * g
+            } else {
+                x
+            });
+        }
+        // Warm start: last step's impulses, which scale with the step squared.
+        ws.mu.resize(cs.len(), 0.0);
+        match (self.params.warm_start, ws.last_dt) {
+            (true, Some(last)) => {
+                // Kept only when it helps: in a nearly straight row the
+                // impulses are huge and sensitive to direction, and replaying
+                // them along new directions can do more harm than good.
+                let scale = (h / last) * (h / last);
+                ws.mu.iter_mut().for_each(|m| *m *= scale);
+                ws.free.clone_from(&ws.pred);
+                let cold = cs.max_stretch(&ws.pred);
+                solver::apply_impulses(cs, &ps.inv_mass, &ws.mu, &mut ws.pred);
+                let warm = cs.max_stretch(&ws.pred);
+                if warm.is_nan() || warm >= cold {
+                    std::mem::swap(&mut ws.pred, &mut ws.free);
+                    ws.mu.fill(0.0);
+                }
+            }
+            _ => ws.mu.fill(0.0),
+        }
+        let tol = self.params.stretch_tolerance;
+        let contact_tol = self.params.contact_tolerance;
+        let mut report = StepReport::default();
+        let mut prev_stretch = f64::INFINITY;
+        let mut factor_age = 0usize;
+        if self.params.method == Method::Newton && ws.newton.is_none() && !cs.is_empty() {
+            ws.newton = NewtonSolver::new(cs, &ps.inv_mass).ok();
+        }
+        loop {
+            let penetration = contact::project_contacts(
+                &self.colliders,
+                &ps.positions,
+                &ps.inv_mass,
+                &mut ws.pred,
+                &mut ws.contacts,
+            );
+            let stretch = cs.max_stretch(&ws.pred);
+            report.max_stretch = stretch;
+            if stretch <= tol && penetration <= contact_tol {
+                report.converged = true;
+                break;
+            }
+            if report.iterations >= self.params.max_iterations || stretch.is_nan() {
+                break;
+            }
+            let mut done = false;
+            if self.params.method == Method::Newton
+                && let Some(newton) = ws.newton.as_mut()
+            {
+                let refactor = !newton.has_factor()
+                    || (factor_age > 0 && stretch > self.params.refactor_ratio * prev_stretch);
+                match newton.iterate(cs, &ps.inv_mass, &mut ws.pred, &mut ws.mu, refactor) {
+                    Ok(refactored) => {
+                        done = true;
+                        if refactored {
+                            report.factorizations += 1;
+                            factor_age = 0;
+                        }
+                        factor_age += 1;
+                    }
+                    // Even a shortened step did not help: one sweep, then a
+                    // fresh factor at the next iteration.
+                    Err(_) => newton.invalidate(),
+                }
+            }
+            if !done {
+                solver::gauss_seidel_sweep(cs, &ps.inv_mass, &mut ws.pred, &mut ws.mu);
+            }
+            prev_stretch = stretch;
+            report.iterations += 1;
+        }
+        report.max_penetration = contact::max_penetration(&self.colliders, &ps.inv_mass, &ws.pred);
+        // Commit: positions from the preview, velocities of a particle that
+        // received its impulses at the start of the step under constant force.
+        for i in 0..n {
+            if ps.inv_mass[i] > 0.0 {
+                ps.velocities[i] = (ws.pred[i] - ps.positions[i]) / h + 0.5 * h * g;
+                ps.positions[i] = ws.pred[i];
+            } else {
+                ps.velocities[i] = Vector3::zeros();
+            }
+        }
+        for _ in 0..self.params.velocity_iterations {
+            solver::velocity_sweep(cs, &ps.inv_mass, &ps.positions, &mut ps.velocities);
+        }
+        report.n_contacts = contact::contact_velocities(&mut ps.velocities, &ws.contacts);
+        ws.last_dt = Some(h);
+        self.time += h;
+        Ok(report)
+    }
+
+    /// Advances the world by `steps` steps of `dt` seconds; the report merges
+    /// them (summed iterations, worst stretch, converged if all converged).
+    ///
+    /// # Errors
+    /// As [`step`](Self::step); the steps before the failing one stay done.
+    pub fn step_n(&mut self, steps: usize, dt: f64) -> Result<StepReport> {
+        let mut total = StepReport {
+            converged: true,
+            ..StepReport::default()
+        };
+        for _ in 0..steps {
+            total = total.merge(self.step(dt)?);
+        }
+        Ok(total)
+    }
+
+    fn check_finite(&self) -> Result<()> {
+        let ps = &self.particles;
+        for (what, column) in [("position", &ps.positions), ("velocity", &ps.velocities)] {
+            for (i, p) in column.iter().enumerate() {
+                if !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()) {
+                    return Err(ClothError::NonFinite {
+                        particle: i as u32,
+                        what,
+                        x: p.x,
+                        y: p.y,
+                        z: p.z,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+}

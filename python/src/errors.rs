@@ -1,0 +1,124 @@
+//! The Python exceptions of modelgap and the one mapping from Rust errors to them.
+//!
+//! `ModelgapError` is the base; `DataError` (also a `ValueError`) is for recordings, files
+//! and arguments; `ModelError` for models that cannot be built, derived or simulated;
+//! `ConvergenceError` for fits and steady states that do not converge.
+
+use modelgap::bond::BondError;
+use modelgap::{CoreError, Error};
+use pyo3::exceptions::{PyException, PyValueError};
+use pyo3::prelude::*;
+
+pyo3::create_exception!(
+    modelgap,
+    ModelgapError,
+    PyException,
+    "Base class of every error modelgap raises."
+);
+
+// `create_exception!` takes one base; DataError is built at registration with two.
+pyo3::create_exception!(
+    modelgap,
+    ModelError,
+    ModelgapError,
+    "A model cannot be read, built, derived or simulated."
+);
+pyo3::create_exception!(
+    modelgap,
+    ConvergenceError,
+    ModelgapError,
+    "A fit or a steady-state solve did not converge."
+);
+
+/// `DataError(ModelgapError, ValueError)`, created once at registration.
+static DATA_ERROR: pyo3::sync::PyOnceLock<Py<pyo3::types::PyType>> = pyo3::sync::PyOnceLock::new();
+
+fn data_error_type(py: Python<'_>) -> PyResult<&Bound<'_, pyo3::types::PyType>> {
+    DATA_ERROR
+        .get_or_try_init(py, || {
+            let builtins = py.import("builtins")?;
+            let type_fn = builtins.getattr("type")?;
+            let bases = (
+                py.get_type::<ModelgapError>(),
+                py.get_type::<PyValueError>(),
+            );
+            let dict = pyo3::types::PyDict::new(py);
+            dict.set_item("__module__", "modelgap")?;
+            dict.set_item(
+                "__doc__",
+                "Bad input data: a recording, a file, an argument. Also a ValueError.",
+            )?;
+            let t = type_fn.call1(("DataError", bases, dict))?;
+            Ok(t.cast_into::<pyo3::types::PyType>()?.unbind())
+        })
+        .map(|t| t.bind(py))
+}
+
+/// Registers the exception classes on the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("ModelgapError", py.get_type::<ModelgapError>())?;
+    m.add("DataError", data_error_type(py)?)?;
+    m.add("ModelError", py.get_type::<ModelError>())?;
+    m.add("ConvergenceError", py.get_type::<ConvergenceError>())?;
+    Ok(())
+}
+
+/// Which Python class an error maps to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Data,
+    Model,
+    Convergence,
+}
+
+fn core_kind(e: &CoreError) -> Kind {
+    match e {
+        CoreError::Model { .. } => Kind::Model,
+        CoreError::Fit { .. } => Kind::Convergence,
+        _ => Kind::Data,
+    }
+}
+
+fn bond_kind(e: &BondError) -> Kind {
+    match e {
+        BondError::Core(c) => core_kind(c),
+        BondError::Io { .. }
+        | BondError::File { .. }
+        | BondError::BadInput { .. }
+        | BondError::BadOptions(_)
+        | BondError::BadParameter { .. }
+        | BondError::UnknownParameter { .. }
+        | BondError::UnknownModel { .. } => Kind::Data,
+        BondError::Ode(_) => Kind::Convergence,
+        _ => Kind::Model,
+    }
+}
+
+/// Converts any modelgap error into its Python exception, with the Rust message unchanged.
+pub fn to_py_err(e: impl Into<Error>) -> PyErr {
+    let e: Error = e.into();
+    let kind = match &e {
+        Error::Core(c) => core_kind(c),
+        Error::Bond(b) => bond_kind(b),
+        _ => Kind::Model,
+    };
+    let message = e.to_string();
+    match kind {
+        Kind::Model => ModelError::new_err(message),
+        Kind::Convergence => ConvergenceError::new_err(message),
+        Kind::Data => Python::attach(|py| match data_error_type(py) {
+            Ok(t) => PyErr::from_type(t.clone(), message),
+            Err(err) => err,
+        }),
+    }
+}
+
+/// A `DataError` with a message of the bindings' own (a bad argument).
+pub fn data_error(message: impl Into<String>) -> PyErr {
+    let message = message.into();
+    Python::attach(|py| match data_error_type(py) {
+        Ok(t) => PyErr::from_type(t.clone(), message),
+        Err(err) => err,
+    })
+}

@@ -1,0 +1,150 @@
+"""The measurement loop from Python: a hidden effect found, the error falls, nothing
+invented for a right model; pickling and many recordings at once."""
+
+from __future__ import annotations
+
+import _thread
+import json
+import threading
+import time
+import pickle
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+
+import modelgap
+from modelgap import Effect, Recording
+from modelgap.bond import BondModel, hidden_cases, hidden_recording
+
+
+@pytest.fixture(scope="module")
+def coulomb() -> Recording:
+    return hidden_recording("coulomb", seed=1, duration=4.0)
+
+
+@pytest.fixture(scope="module")
+def coulomb_explained(coulomb: Recording) -> modelgap.Explanation:
+    return modelgap.explain(BondModel.dc_motor(), coulomb)
+
+
+def test_hidden_cases_are_listed():
+    cases = hidden_cases()
+    assert "coulomb" in cases and "nothing" in cases
+    with pytest.raises(modelgap.DataError, match="unknown hidden-effect case `x`"):
+        hidden_recording("x")
+
+
+def test_compare_shows_where_the_model_fails(coulomb: Recording):
+    c = modelgap.compare(BondModel.dc_motor(), coulomb)
+    omega = c.output("omega")
+    assert omega.unit == "rad/s"
+    assert omega.rms > 3 * omega.noise_floor
+    assert omega.windows and all(s < e for s, e, _ in omega.windows)
+    assert omega.residual.shape == omega.measured.shape == c.t.shape
+    assert "omega" in c.text()
+    paper = modelgap.compare(BondModel.dc_motor(), coulomb, band_fraction=0.02)
+    assert paper.output("omega").band != omega.band
+
+
+def test_explain_finds_the_hidden_effect_and_the_error_falls(
+    coulomb: Recording, coulomb_explained: modelgap.Explanation, tmp_path: Path
+):
+    ex = coulomb_explained
+    motor = BondModel.dc_motor()
+    assert ex.verdict == "effect-found"
+    best = ex.ranked[0]
+    assert best.id == "coulomb@1m" and ex.chosen[0].id == "coulomb@1m"
+    (tau,) = best.params
+    assert tau.name == "tau_c" and tau.unit == "N m"
+    assert tau.value == pytest.approx(0.004, rel=0.05)
+    assert 0 < tau.std_error < 0.1 * tau.value
+    assert best.score > 10 and best.kind == "missing-element"
+    assert "Coulomb" in ex.text()
+
+    fixed = motor.with_effects(ex.effects)
+    assert len(fixed.effects) == 1 and fixed.params["tau_c_1m"] == tau.value
+    before = modelgap.compare(motor, coulomb)
+    after = modelgap.compare(fixed, coulomb)
+    for o in ("i", "omega"):
+        assert after.output(o).rms < 0.5 * before.output(o).rms
+    assert "added by explain" in fixed.to_toml()
+
+    also = modelgap.fix(motor, coulomb)
+    assert also.params == fixed.params
+
+    page = modelgap.write_report(tmp_path / "report", before, ex, after)
+    assert Path(page).name == "report.html" and Path(page).exists()
+    assert (tmp_path / "report" / "comparison.mcap").exists()
+
+
+def test_nothing_missing_for_a_right_model():
+    rec = hidden_recording("nothing", seed=2, duration=2.0)
+    ex = modelgap.explain(BondModel.dc_motor(), rec)
+    assert ex.verdict == "nothing-missing"
+    assert ex.chosen == [] and ex.effects == []
+
+
+def test_progress_is_reported(coulomb: Recording):
+    seen: list[tuple[int, int]] = []
+    modelgap.explain(
+        BondModel.dc_motor(),
+        coulomb,
+        only=["coulomb@1m", "deviation:R"],
+        progress=lambda done, total: seen.append((done, total)),
+    )
+    assert seen and seen[-1] == (2, 2)
+
+
+def test_progress_exception_stops_explain(coulomb: Recording):
+    def boom(done: int, total: int) -> None:
+        raise RuntimeError("stop here")
+
+    with pytest.raises(RuntimeError, match="stop here"):
+        modelgap.explain(BondModel.dc_motor(), coulomb, progress=boom)
+
+
+def test_pickling_round_trips(coulomb: Recording, coulomb_explained: modelgap.Explanation):
+    motor = BondModel.dc_motor().with_start("steady")
+    fixed = motor.with_effects(coulomb_explained.effects)
+    back = pickle.loads(pickle.dumps(fixed))
+    assert back.params == fixed.params and back.start == "steady"
+    assert back.effects == fixed.effects
+    eff = coulomb_explained.effects[0]
+    assert pickle.loads(pickle.dumps(eff)) == eff
+    assert Effect.from_json(eff.to_json()) == eff
+    rec = pickle.loads(pickle.dumps(coulomb))
+    assert rec == coulomb
+
+
+def test_an_effect_out_of_bounds_is_a_model_error(coulomb_explained: modelgap.Explanation):
+    data = json.loads(coulomb_explained.effects[0].to_json())
+    data["values"] = [-1.0]  # a negative friction torque: below the candidate's bound
+    bad = Effect.from_json(json.dumps(data))
+    with pytest.raises(modelgap.ModelError, match="coulomb@1m"):
+        BondModel.dc_motor().with_effects([bad])
+
+
+def test_explain_many_with_a_thread_pool():
+    recs = [hidden_recording(c, seed=3, duration=2.0) for c in ("load", "nothing")]
+    motor = BondModel.dc_motor()
+    serial = modelgap.explain_many(motor, recs)
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        parallel = modelgap.explain_many(motor, recs, executor=pool)
+    assert [e.verdict for e in serial] == [e.verdict for e in parallel]
+    assert serial[0].chosen[0].id == parallel[0].chosen[0].id == "load@1m"
+    assert serial[1].verdict == "nothing-missing"
+
+
+def test_ctrl_c_stops_explain():
+    # A long explain; a simulated Ctrl-C (SIGINT) 0.2 s in must stop it between fits.
+    rec = hidden_recording("coupling", seed=4, duration=30.0)
+    timer = threading.Timer(0.2, _thread.interrupt_main)
+    start = time.perf_counter()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            modelgap.explain(BondModel.dc_motor(), rec)
+    finally:
+        timer.cancel()
+    assert time.perf_counter() - start < 10.0  # the whole explain takes about 3 s here
