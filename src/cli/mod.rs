@@ -10,6 +10,7 @@
 mod arr;
 mod bench;
 mod causality;
+mod cloth;
 mod compare;
 mod demo;
 mod diagnose;
@@ -50,6 +51,9 @@ enum Command {
     /// Bond graphs: equations, simulation, causal graph, causality, diagnosis
     #[command(subcommand)]
     Bond(BondCommand),
+    /// Cloth: run a scene and write its trajectory, time the solver
+    #[command(subcommand)]
+    Cloth(cloth::ClothCommand),
     /// Run the main demonstration: the measurement loop on a bundled motor recording with a
     /// hidden effect, then the DC-motor paper's Table 7 diagnosis
     Demo(demo::DemoArgs),
@@ -91,6 +95,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Bond(BondCommand::Arr(args)) => arr::run(&args),
         Command::Bond(BondCommand::Table7(args)) => table7::run(&args),
         Command::Bond(BondCommand::Bench(args)) => bench::run(&args),
+        Command::Cloth(command) => cloth::run(&command),
         Command::Compare(args) => compare::run(&args),
         Command::Explain(args) => explain::run(&args),
         Command::Fix(args) => fix::run(&args),

@@ -13,7 +13,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("gauss-seidel", Method::GaussSeidel),
     ];
     println!(
-        "scene        method        wall (s)  x real time  max stretch  iters/step  factors  converged  min y (m)"
+        "scene        method        wall (s)  x real time  max stretch  iters/step  factors  fallbacks  converged  min y (m)"
     );
     for scene in scenes::all() {
         if args.first().is_some_and(|s| s != "all" && s != &scene.name) {
@@ -45,7 +45,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .map(|x| x.y)
                 .fold(f64::INFINITY, f64::min);
             println!(
-                "{:<12} {:<12} {:>9.3} {:>12.1} {:>12.2e} {:>11.1} {:>8} {:>10} {:>10.3}",
+                "{:<12} {:<12} {:>9.3} {:>12.1} {:>12.2e} {:>11.1} {:>8} {:>10} {:>10} {:>10.3}",
                 scene.name,
                 label,
                 wall,
@@ -53,6 +53,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 total.max_stretch,
                 total.iterations as f64 / scene.n_steps() as f64,
                 total.factorizations,
+                total.fallback_sweeps,
                 if unconverged == 0 {
                     "all".to_string()
                 } else {

@@ -1,6 +1,8 @@
 //! Errors of the cloth crate.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+use modelgap_core::{CoreError, Location};
 
 /// Everything that can go wrong while building or stepping cloth. Each variant
 /// carries the particles, lines or values a user needs to fix the input.
@@ -120,6 +122,115 @@ pub enum ClothError {
         /// The file.
         path: PathBuf,
     },
+    /// A value of a marker file or recording cannot be used.
+    #[error("expected {expected} for `{field}` at {at}, found {found}{}", in_path(.path))]
+    MarkerField {
+        /// Where: a CSV line, an MCAP message or a frame (sample) of a recording.
+        at: Location,
+        /// The column or JSON field (`t`, `id`, `x`, `ids`, `positions`, …).
+        field: String,
+        /// What was expected.
+        expected: String,
+        /// What was found.
+        found: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+    /// Marker frames are not in strictly increasing time.
+    #[error(
+        "marker time is not strictly increasing at {at}: {t} s after {t_prev} s{}",
+        in_path(.path)
+    )]
+    MarkerTime {
+        /// The frame (CSV line, MCAP message or sample) that is not later than its predecessor.
+        at: Location,
+        /// The previous frame's time (s).
+        t_prev: f64,
+        /// The offending time (s).
+        t: f64,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+    /// A marker file has no header `t,id,x,y,z`, or a different one.
+    #[error("expected the header `t,id,x,y,z`, found {found}{}", in_path(.path))]
+    MarkerHeader {
+        /// The header found (quoted), or `no header`.
+        found: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+    /// A marker recording has no frames.
+    #[error("expected at least one marker frame, found none{}", in_path(.path))]
+    NoMarkerFrames {
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+    /// A prescribed pin path cannot be used.
+    #[error("pin path point {index}: {message}")]
+    BadPinPath {
+        /// The point (0-based).
+        index: usize,
+        /// What was expected and found.
+        message: String,
+    },
+    /// A kinematic pin was asked for a vertex that is not pinned (static).
+    #[error("vertex {vertex} is not pinned; only pinned (static) vertices can follow a path")]
+    NotPinned {
+        /// The vertex (index in its mesh).
+        vertex: usize,
+    },
+    /// An error of modelgap-core: MCAP files, their topics, their time.
+    #[error(transparent)]
+    Core(#[from] CoreError),
+}
+
+impl ClothError {
+    /// The same error with `path` as the file it is about (for marker errors and core
+    /// errors; other variants are returned unchanged).
+    #[must_use]
+    pub fn with_path(self, file: &Path) -> Self {
+        let set = |path: Option<PathBuf>| path.or_else(|| Some(file.to_path_buf()));
+        match self {
+            Self::MarkerField {
+                at,
+                field,
+                expected,
+                found,
+                path,
+            } => Self::MarkerField {
+                at,
+                field,
+                expected,
+                found,
+                path: set(path),
+            },
+            Self::MarkerTime {
+                at,
+                t_prev,
+                t,
+                path,
+            } => Self::MarkerTime {
+                at,
+                t_prev,
+                t,
+                path: set(path),
+            },
+            Self::MarkerHeader { found, path } => Self::MarkerHeader {
+                found,
+                path: set(path),
+            },
+            Self::NoMarkerFrames { path } => Self::NoMarkerFrames { path: set(path) },
+            Self::Core(e) => Self::Core(e.with_path(file)),
+            other => other,
+        }
+    }
+}
+
+/// ` in <path>` when the path is known, else nothing.
+fn in_path(path: &Option<PathBuf>) -> String {
+    path.as_ref()
+        .map(|p| format!(" in {}", p.display()))
+        .unwrap_or_default()
 }
 
 /// `Result` with [`ClothError`] as the error type.

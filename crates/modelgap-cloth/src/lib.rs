@@ -30,22 +30,29 @@
 //! ([`DistanceConstraints`]), [`mesh`] ([`GridCloth`], OBJ meshes, the
 //! vertex numbering), [`solver`] ([`SolverParams`], [`StepReport`], the
 //! Gauss–Seidel sweep), [`newton`] (the global solve), [`contact`]
-//! ([`Collider`]), [`world`] ([`ClothWorld`]), [`scenes`] (the reference
-//! scenes), [`error`].
+//! ([`Collider`]), [`world`] ([`ClothWorld`]), [`kinematic`] ([`PinPath`]:
+//! pins that follow a path), [`markers`] ([`MarkerRecording`], marker CSV and
+//! MCAP files), [`scenes`] (the reference scenes), [`trajectory`] (running a
+//! scene, its recorded frames and Foxglove MCAP), [`error`].
 
 pub mod constraints;
 pub mod contact;
 pub mod error;
+pub mod kinematic;
+pub mod markers;
 pub mod mesh;
 pub mod newton;
 pub mod particles;
 pub mod scenes;
 pub mod solver;
+pub mod trajectory;
 pub mod world;
 
 pub use constraints::DistanceConstraints;
 pub use contact::{Collider, ColliderId, Shape};
 pub use error::{ClothError, Result};
+pub use kinematic::{KinematicPin, PinPath};
+pub use markers::MarkerRecording;
 pub use mesh::{BuildMesh, ClothMesh, GridCloth, GridEdges};
 pub use particles::{ParticleId, ParticleSet};
 pub use scenes::Scene;

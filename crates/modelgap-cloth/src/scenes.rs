@@ -33,15 +33,26 @@
 //! center = [0.5, 0.0, 0.5]
 //! radius = 0.3
 //! friction = 0.3
+//!
+//! [pins]                    # optional: pins that move (kinematic pins)
+//! from_markers = false      # pinned vertices whose ids appear in a marker
+//!                           # recording follow the recorded positions
+//! markers = "run.csv"       # that recording (.csv or .mcap, relative to the scene file)
+//!
+//! [[pins.paths]]            # any number: a vertex (pinned by this) following a path
+//! vertex = 29
+//! path = [[0.0, 0.983, 0.0, 0.0], [1.0, 1.5, 0.0, 0.0]]  # [t (s), x, y, z (m)], linear
 //! ```
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use nalgebra::{Isometry3, Vector3};
 use serde::Deserialize;
 
 use crate::contact::Collider;
 use crate::error::{ClothError, Result};
+use crate::kinematic::{PinPath, follow_markers};
+use crate::markers::{MarkerRecording, read_markers_path};
 use crate::mesh::GridCloth;
 use crate::solver::SolverParams;
 use crate::world::{ClothId, ClothWorld};
@@ -67,6 +78,15 @@ pub struct Scene {
     pub cloth: GridCloth,
     /// Static colliders.
     pub colliders: Vec<Collider>,
+    /// Pinned vertices that follow prescribed paths: (vertex index, path). Each vertex is
+    /// also in the cloth's pins.
+    pub pin_paths: Vec<(u32, PinPath)>,
+    /// Whether pinned vertices whose ids appear in a marker recording follow the recorded
+    /// positions (see [`build`](Self::build)).
+    pub pins_from_markers: bool,
+    /// The marker recording of `pins_from_markers` (`.csv` or `.mcap`); a relative path in
+    /// a scene file is resolved against the file's folder by [`from_path`](Self::from_path).
+    pub pin_markers: Option<PathBuf>,
 }
 
 #[derive(Deserialize)]
@@ -82,6 +102,25 @@ struct SceneFile {
     cloth: ClothFile,
     #[serde(default)]
     colliders: Vec<ColliderFile>,
+    #[serde(default)]
+    pins: PinsFile,
+}
+
+#[derive(Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PinsFile {
+    #[serde(default)]
+    from_markers: bool,
+    markers: Option<PathBuf>,
+    #[serde(default)]
+    paths: Vec<PathFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PathFile {
+    vertex: u32,
+    path: Vec<[f64; 4]>,
 }
 
 #[derive(Deserialize)]
@@ -171,6 +210,20 @@ impl Scene {
         for &p in &c.pins {
             cloth = cloth.pin(p);
         }
+        let n_vertices = c.nx * c.nz;
+        let mut pin_paths = Vec::with_capacity(file.pins.paths.len());
+        for (k, p) in file.pins.paths.iter().enumerate() {
+            if p.vertex as usize >= n_vertices {
+                return Err(bad(format!(
+                    "pins.paths[{k}].vertex must be below {n_vertices} (the grid's vertices), found {}",
+                    p.vertex
+                )));
+            }
+            let path = PinPath::from_rows(&p.path)
+                .map_err(|e| bad(format!("pins.paths[{k}] (vertex {}): {e}", p.vertex)))?;
+            cloth = cloth.pin(p.vertex);
+            pin_paths.push((p.vertex, path));
+        }
         let colliders =
             file.colliders
                 .iter()
@@ -196,6 +249,9 @@ impl Scene {
             params,
             cloth,
             colliders,
+            pin_paths,
+            pins_from_markers: file.pins.from_markers,
+            pin_markers: file.pins.markers,
         })
     }
 
@@ -208,7 +264,47 @@ impl Scene {
             source,
             path: path.to_path_buf(),
         })?;
-        Self::from_toml(&text, &path.display().to_string())
+        let mut scene = Self::from_toml(&text, &path.display().to_string())?;
+        if let Some(markers) = scene.pin_markers.take() {
+            scene.pin_markers = Some(match path.parent() {
+                Some(dir) if markers.is_relative() => dir.join(markers),
+                _ => markers,
+            });
+        }
+        Ok(scene)
+    }
+
+    /// The same scene on a grid of `nx × nz` vertices over the same width: pins (static and
+    /// moving) go to the nearest vertex of the new grid at the same relative place, so
+    /// `two-corners` keeps its two corners.
+    ///
+    /// # Errors
+    ///
+    /// [`ClothError::BadGrid`] for fewer than 2 × 2 vertices.
+    pub fn resized(&self, nx: usize, nz: usize) -> Result<Self> {
+        if nx < 2 || nz < 2 {
+            return Err(ClothError::BadGrid { nx, nz });
+        }
+        let old = &self.cloth;
+        let (ox, oz) = (old.nx.max(2), old.nz.max(2));
+        let map = |v: u32| -> u32 {
+            let (col, row) = (v as usize % ox, v as usize / ox);
+            let scale = |i: usize, n_old: usize, n_new: usize| {
+                ((i as f64) * (n_new - 1) as f64 / (n_old - 1) as f64).round() as usize
+            };
+            (scale(row, oz, nz) * nx + scale(col, ox, nx)) as u32
+        };
+        let mut scene = self.clone();
+        scene.cloth.nx = nx;
+        scene.cloth.nz = nz;
+        scene.cloth.spacing = old.spacing * (ox - 1) as f64 / (nx - 1) as f64;
+        scene.cloth.pinned = old.pinned.iter().map(|&v| map(v)).collect();
+        scene.cloth.pinned.sort_unstable();
+        scene.cloth.pinned.dedup();
+        for (v, _) in &mut scene.pin_paths {
+            *v = map(*v);
+        }
+        Ok(scene)
     }
 
     /// The number of steps of `dt` that cover `duration`.
@@ -218,14 +314,53 @@ impl Scene {
     }
 
     /// A world holding the scene's cloth and colliders, and the cloth's id.
+    /// Its kinematic pins follow their paths, and with `pins_from_markers` the pinned
+    /// vertices in the `pin_markers` recording follow it.
     ///
     /// # Errors
-    /// The cloth's errors (see [`ClothWorld::add_cloth`]).
+    /// The cloth's errors (see [`ClothWorld::add_cloth`]); with `pins_from_markers`, the
+    /// recording's read errors, or [`ClothError::Scene`] when no recording is named.
     pub fn build(&self) -> Result<(ClothWorld, ClothId)> {
+        self.build_with_markers(None)
+    }
+
+    /// Like [`build`](Self::build), but pinned vertices whose ids appear in `markers` (when
+    /// given, whatever `pins_from_markers` says) follow that recording instead of the
+    /// scene's `pin_markers` file.
+    ///
+    /// # Errors
+    /// As [`build`](Self::build).
+    pub fn build_with_markers(
+        &self,
+        markers: Option<&MarkerRecording>,
+    ) -> Result<(ClothWorld, ClothId)> {
         let mut world = ClothWorld::new(self.params.clone());
         let cloth = world.add_cloth(self.cloth.clone())?;
         for c in &self.colliders {
             world.add_collider(c.clone());
+        }
+        for (v, path) in &self.pin_paths {
+            world.add_kinematic_pin(cloth, *v as usize, path.clone())?;
+        }
+        let loaded;
+        let recording = match (markers, &self.pin_markers) {
+            (Some(rec), _) => Some(rec),
+            (None, Some(path)) if self.pins_from_markers => {
+                loaded = read_markers_path(path)?;
+                Some(&loaded)
+            }
+            (None, None) if self.pins_from_markers => {
+                return Err(ClothError::Scene {
+                    scene: self.name.clone(),
+                    message: "pins.from_markers needs pins.markers (a .csv or .mcap file) \
+                              or a recording passed to build_with_markers"
+                        .into(),
+                });
+            }
+            _ => None,
+        };
+        if let Some(rec) = recording {
+            follow_markers(&mut world, cloth, rec)?;
         }
         Ok((world, cloth))
     }

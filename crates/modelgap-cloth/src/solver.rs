@@ -43,11 +43,12 @@ pub enum Method {
     /// hold. Cheap per iteration, any-time, slow to converge on large meshes.
     #[default]
     GaussSeidel,
-    /// All constraints at once: Newton (Gauss–Newton) steps on the impulse
-    /// system with a sparse Cholesky factorisation whose ordering and
-    /// symbolic analysis are computed once per topology, and whose numeric
+    /// All constraints at once: Newton's method on the end-of-step
+    /// positions and impulses together, with the geometric stiffness of
+    /// tensioned links, and a sparse `LDLᵀ` factorisation whose ordering and
+    /// symbolic analysis are computed once per topology and whose numeric
     /// factor is reused across iterations and steps while the error keeps
-    /// shrinking fast.
+    /// shrinking fast (see [`crate::newton`]).
     Newton,
 }
 
@@ -105,6 +106,9 @@ pub struct StepReport {
     pub converged: bool,
     /// Numeric factorisations done (Newton only).
     pub factorizations: usize,
+    /// Gauss–Seidel sweeps done because a Newton step failed even with a
+    /// fresh factor (Newton only; 0 when Newton worked throughout).
+    pub fallback_sweeps: usize,
     /// Particles in contact with a collider during the step.
     pub n_contacts: usize,
     /// Deepest penetration into a collider at the end of the step (m).
@@ -125,6 +129,7 @@ impl StepReport {
             },
             converged: self.converged && next.converged,
             factorizations: self.factorizations + next.factorizations,
+            fallback_sweeps: self.fallback_sweeps + next.fallback_sweeps,
             n_contacts: self.n_contacts.max(next.n_contacts),
             max_penetration: self.max_penetration.max(next.max_penetration),
         }

@@ -7,8 +7,9 @@ use nalgebra::Vector3;
 use crate::constraints::DistanceConstraints;
 use crate::contact::{self, Collider, ColliderId, ContactState};
 use crate::error::{ClothError, Result};
+use crate::kinematic::{KinematicPin, PinPath};
 use crate::mesh::{BuildMesh, ClothMesh};
-use crate::newton::NewtonSolver;
+use crate::newton::{NewtonSolver, StepInput};
 use crate::particles::{ParticleId, ParticleSet};
 use crate::solver::{self, Method, SolverParams, StepReport};
 
@@ -54,6 +55,7 @@ pub struct ClothWorld {
     constraints: DistanceConstraints,
     cloths: Vec<ClothEntry>,
     colliders: Vec<Collider>,
+    kinematic: Vec<KinematicPin>,
     workspace: SolverWorkspace,
     time: f64,
 }
@@ -68,6 +70,7 @@ impl ClothWorld {
             constraints: DistanceConstraints::new(),
             cloths: Vec::new(),
             colliders: Vec::new(),
+            kinematic: Vec::new(),
             workspace: SolverWorkspace::default(),
             time: 0.0,
         }
@@ -108,6 +111,41 @@ impl ClothWorld {
     pub fn add_collider(&mut self, collider: Collider) -> ColliderId {
         self.colliders.push(collider);
         ColliderId(self.colliders.len() as u32 - 1)
+    }
+
+    /// Makes a pinned vertex of a cloth follow `path` (see [`crate::kinematic`]): it moves
+    /// to the path's position at the current time now, and to the path's position at the
+    /// end of each step during the step. A vertex that already follows a path gets the new one.
+    ///
+    /// # Errors
+    ///
+    /// [`ClothError::UnknownCloth`], [`ClothError::VertexOutOfRange`], or
+    /// [`ClothError::NotPinned`] when the vertex is dynamic.
+    pub fn add_kinematic_pin(
+        &mut self,
+        cloth: ClothId,
+        vertex: usize,
+        path: PinPath,
+    ) -> Result<ParticleId> {
+        let particle = self.particle(cloth, vertex)?;
+        let i = particle.index();
+        if !self.particles.is_static(i) {
+            return Err(ClothError::NotPinned { vertex });
+        }
+        self.particles.positions[i] = path.at(self.time);
+        self.particles.velocities[i] = Vector3::zeros();
+        let pin = KinematicPin { particle, path };
+        match self.kinematic.iter_mut().find(|k| k.particle == particle) {
+            Some(slot) => *slot = pin,
+            None => self.kinematic.push(pin),
+        }
+        Ok(particle)
+    }
+
+    /// The kinematic pins, in the order added.
+    #[must_use]
+    pub fn kinematic_pins(&self) -> &[KinematicPin] {
+        &self.kinematic
     }
 
     /// The solver parameters.
@@ -253,21 +291,28 @@ impl ClothWorld {
                 x
             });
         }
+        // Kinematic pins end the step on their paths; the constraints see them there.
+        let t_end = self.time + h;
+        for pin in &self.kinematic {
+            ws.pred[pin.particle.index()] = pin.path.at(t_end);
+        }
         // Warm start: last step's impulses, which scale with the step squared.
         ws.mu.resize(cs.len(), 0.0);
+        ws.free.clone_from(&ws.pred);
+        let newton = self.params.method == Method::Newton;
         match (self.params.warm_start, ws.last_dt) {
             (true, Some(last)) => {
-                // Kept only when it helps: in a nearly straight row the
-                // impulses are huge and sensitive to direction, and replaying
-                // them along new directions can do more harm than good.
+                // Gauss–Seidel keeps them only when they help: in a nearly
+                // straight row the impulses are huge and sensitive to
+                // direction, and replaying them along new directions can do
+                // more harm than good. Newton always starts from them.
                 let scale = (h / last) * (h / last);
                 ws.mu.iter_mut().for_each(|m| *m *= scale);
-                ws.free.clone_from(&ws.pred);
                 let cold = cs.max_stretch(&ws.pred);
                 solver::apply_impulses(cs, &ps.inv_mass, &ws.mu, &mut ws.pred);
                 let warm = cs.max_stretch(&ws.pred);
-                if warm.is_nan() || warm >= cold {
-                    std::mem::swap(&mut ws.pred, &mut ws.free);
+                if warm.is_nan() || (warm >= cold && !newton) {
+                    ws.pred.clone_from(&ws.free);
                     ws.mu.fill(0.0);
                 }
             }
@@ -276,53 +321,45 @@ impl ClothWorld {
         let tol = self.params.stretch_tolerance;
         let contact_tol = self.params.contact_tolerance;
         let mut report = StepReport::default();
-        let mut prev_stretch = f64::INFINITY;
-        let mut factor_age = 0usize;
-        if self.params.method == Method::Newton && ws.newton.is_none() && !cs.is_empty() {
+        if newton && ws.newton.is_none() && !cs.is_empty() {
             ws.newton = NewtonSolver::new(cs, &ps.inv_mass).ok();
         }
-        loop {
-            let penetration = contact::project_contacts(
-                &self.colliders,
-                &ps.positions,
-                &ps.inv_mass,
-                &mut ws.pred,
-                &mut ws.contacts,
-            );
-            let stretch = cs.max_stretch(&ws.pred);
-            report.max_stretch = stretch;
-            if stretch <= tol && penetration <= contact_tol {
-                report.converged = true;
-                break;
-            }
-            if report.iterations >= self.params.max_iterations || stretch.is_nan() {
-                break;
-            }
-            let mut done = false;
-            if self.params.method == Method::Newton
-                && let Some(newton) = ws.newton.as_mut()
-            {
-                let refactor = !newton.has_factor()
-                    || (factor_age > 0 && stretch > self.params.refactor_ratio * prev_stretch);
-                match newton.iterate(cs, &ps.inv_mass, &mut ws.pred, &mut ws.mu, refactor) {
-                    Ok(refactored) => {
-                        done = true;
-                        if refactored {
-                            report.factorizations += 1;
-                            factor_age = 0;
-                        }
-                        factor_age += 1;
-                    }
-                    // Even a shortened step did not help: one sweep, then a
-                    // fresh factor at the next iteration.
-                    Err(_) => newton.invalidate(),
+        if newton && let Some(global) = ws.newton.as_mut() {
+            let input = StepInput {
+                constraints: cs,
+                inv_mass: &ps.inv_mass,
+                start: &ps.positions,
+                free: &ws.free,
+                colliders: &self.colliders,
+                params: &self.params,
+            };
+            let out = global.solve(&input, &mut ws.pred, &mut ws.mu, &mut ws.contacts);
+            report.iterations = out.iterations;
+            report.factorizations = out.factorizations;
+            report.fallback_sweeps = out.fallback_sweeps;
+            report.converged = out.converged;
+            report.max_stretch = out.max_stretch;
+        } else {
+            loop {
+                let penetration = contact::project_contacts(
+                    &self.colliders,
+                    &ps.positions,
+                    &ps.inv_mass,
+                    &mut ws.pred,
+                    &mut ws.contacts,
+                );
+                let stretch = cs.max_stretch(&ws.pred);
+                report.max_stretch = stretch;
+                if stretch <= tol && penetration <= contact_tol {
+                    report.converged = true;
+                    break;
                 }
-            }
-            if !done {
+                if report.iterations >= self.params.max_iterations || stretch.is_nan() {
+                    break;
+                }
                 solver::gauss_seidel_sweep(cs, &ps.inv_mass, &mut ws.pred, &mut ws.mu);
+                report.iterations += 1;
             }
-            prev_stretch = stretch;
-            report.iterations += 1;
         }
         report.max_penetration = contact::max_penetration(&self.colliders, &ps.inv_mass, &ws.pred);
         // Commit: positions from the preview, velocities of a particle that
@@ -335,12 +372,18 @@ impl ClothWorld {
                 ps.velocities[i] = Vector3::zeros();
             }
         }
+        for pin in &self.kinematic {
+            let i = pin.particle.index();
+            let end = pin.path.at(t_end);
+            ps.velocities[i] = (end - ps.positions[i]) / h;
+            ps.positions[i] = end;
+        }
         for _ in 0..self.params.velocity_iterations {
             solver::velocity_sweep(cs, &ps.inv_mass, &ps.positions, &mut ps.velocities);
         }
         report.n_contacts = contact::contact_velocities(&mut ps.velocities, &ws.contacts);
         ws.last_dt = Some(h);
-        self.time += h;
+        self.time = t_end;
         Ok(report)
     }
 

@@ -1,0 +1,380 @@
+//! Running a scene and keeping its trajectory: marker frames, the mesh, the solver's
+//! statistics; and writing it as marker CSV or as an MCAP file Foxglove shows in 3D.
+//!
+//! The MCAP file holds three topics: [`MARKERS_TOPIC`](crate::markers::MARKERS_TOPIC) (the
+//! marker frames, readable with [`read_markers_mcap`](crate::markers::read_markers_mcap)),
+//! [`CLOTH_TOPIC`] (a `foxglove.SceneUpdate` per frame: the mesh as a triangle list and its
+//! edges as a line list, in frame [`WORLD_FRAME`]) and [`TF_TOPIC`] (one static
+//! `foxglove.FrameTransform` from `world` to the simulation's frame `cloth`). The
+//! simulation is y-up and Foxglove is z-up: the primitives' pose (and the transform) turn
+//! +y into +z, so gravity points down on screen.
+//!
+//! # Example
+//!
+//! ```
+//! use modelgap_cloth::scenes;
+//! use modelgap_cloth::trajectory::{MarkerSelection, RunOptions, run_scene};
+//!
+//! let scene = scenes::corner().resized(6, 6)?;
+//! let options = RunOptions { duration: Some(0.1), markers: MarkerSelection::Ids(vec![0, 35]), ..RunOptions::default() };
+//! let run = run_scene(&scene, &options)?;
+//! assert_eq!(run.stats.steps, 10);
+//! let markers = run.markers.as_ref().map(|m| (m.n_frames(), m.n_markers()));
+//! assert_eq!(markers, Some((11, 2)));
+//! # Ok::<(), modelgap_cloth::ClothError>(())
+//! ```
+
+use std::fs::File;
+use std::io::{BufWriter, Seek, Write};
+use std::path::Path;
+
+use modelgap_core::CoreError;
+use modelgap_core::io::Format;
+use modelgap_core::io::mcap::{McapCompression, McapWriter};
+
+use crate::error::{ClothError, Result};
+use crate::markers::{
+    MarkerRecording, add_markers_channel, write_markers_csv_path, write_markers_frame,
+};
+use crate::mesh::BuildMesh as _;
+use crate::scenes::Scene;
+
+/// The MCAP topic of the cloth's `foxglove.SceneUpdate` messages.
+pub const CLOTH_TOPIC: &str = "/cloth";
+
+/// The MCAP topic of the static `foxglove.FrameTransform`.
+pub const TF_TOPIC: &str = "/tf";
+
+/// The frame the cloth's scene entities are drawn in.
+pub const WORLD_FRAME: &str = "world";
+
+/// The simulation's own (y-up) frame, a child of [`WORLD_FRAME`].
+pub const CLOTH_FRAME: &str = "cloth";
+
+/// Which vertices a run records as markers.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum MarkerSelection {
+    /// Every vertex, ids 0, 1, … (the default).
+    #[default]
+    All,
+    /// These vertices, in this order.
+    Ids(Vec<u32>),
+    /// Nothing: statistics only (benchmarks).
+    None,
+}
+
+/// What [`run_scene`] runs and records.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunOptions {
+    /// Simulated time (s); default the scene's duration.
+    pub duration: Option<f64>,
+    /// Frames per second recorded (Hz), rounded to a whole number of steps per frame (at
+    /// least one); default one frame per step.
+    pub rate: Option<f64>,
+    /// The vertices recorded as markers; default all.
+    pub markers: MarkerSelection,
+}
+
+/// What a run's solver did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RunStats {
+    /// Particles in the world.
+    pub n_particles: usize,
+    /// Distance constraints in the world.
+    pub n_constraints: usize,
+    /// Steps taken.
+    pub steps: usize,
+    /// Step size (s).
+    pub dt: f64,
+    /// Largest relative stretch at the end of any step (dimensionless).
+    pub max_stretch: f64,
+    /// Iterations summed over all steps.
+    pub total_iterations: usize,
+    /// Most iterations of one step.
+    pub max_iterations: usize,
+    /// Steps that ran out of iterations before every constraint held.
+    pub unconverged_steps: usize,
+}
+
+impl RunStats {
+    /// Simulated time (s).
+    #[must_use]
+    pub fn simulated(&self) -> f64 {
+        self.steps as f64 * self.dt
+    }
+
+    /// Mean iterations per step (0 without steps).
+    #[must_use]
+    pub fn mean_iterations(&self) -> f64 {
+        if self.steps == 0 {
+            0.0
+        } else {
+            self.total_iterations as f64 / self.steps as f64
+        }
+    }
+}
+
+/// A scene's run: the recorded frames, the mesh, the statistics.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClothRun {
+    /// The scene's name.
+    pub scene: String,
+    /// The recorded markers (`None` with [`MarkerSelection::None`]).
+    pub markers: Option<MarkerRecording>,
+    /// Every vertex's position (m) in each recorded frame (empty with
+    /// [`MarkerSelection::None`]).
+    pub mesh_frames: Vec<Vec<[f64; 3]>>,
+    /// The mesh's triangles (vertex indices).
+    pub triangles: Vec<[u32; 3]>,
+    /// The mesh's edges (vertex indices), one per constraint.
+    pub edges: Vec<[u32; 2]>,
+    /// What the solver did.
+    pub stats: RunStats,
+}
+
+/// Runs a scene from its start for `options.duration` (or the scene's), recording frames.
+///
+/// # Errors
+///
+/// [`ClothError::BadParameter`] for a non-positive or non-finite duration or rate;
+/// [`ClothError::VertexOutOfRange`] for a selected marker past the mesh; the scene's and
+/// the steps' errors ([`Scene::build`], [`ClothWorld::step`](crate::ClothWorld::step)).
+pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<ClothRun> {
+    let duration = options.duration.unwrap_or(scene.duration);
+    check_positive("duration", duration)?;
+    let dt = scene.dt;
+    let stride = match options.rate {
+        Some(rate) => {
+            check_positive("rate", rate)?;
+            ((1.0 / rate / dt).round() as usize).max(1)
+        }
+        None => 1,
+    };
+    let mesh = scene.cloth.build_mesh()?;
+    let (mut world, cloth) = scene.build()?;
+    let n_vertices = world.positions(cloth).len();
+    let ids: Option<Vec<u32>> = match &options.markers {
+        MarkerSelection::All => Some((0..n_vertices as u32).collect()),
+        MarkerSelection::Ids(ids) => {
+            if let Some(&bad) = ids.iter().find(|&&id| id as usize >= n_vertices) {
+                return Err(ClothError::VertexOutOfRange {
+                    vertex: bad as usize,
+                    n_vertices,
+                });
+            }
+            Some(ids.clone())
+        }
+        MarkerSelection::None => None,
+    };
+    let n_steps = (duration / dt).round() as usize;
+    let mut stats = RunStats {
+        n_particles: world.particles().len(),
+        n_constraints: world.constraints().len(),
+        dt,
+        ..RunStats::default()
+    };
+    let mut t = Vec::new();
+    let mut mesh_frames: Vec<Vec<[f64; 3]>> = Vec::new();
+    let mut record = |step: usize, positions: &[nalgebra::Vector3<f64>]| {
+        if ids.is_some() {
+            t.push(step as f64 * dt);
+            mesh_frames.push(positions.iter().map(|p| [p.x, p.y, p.z]).collect());
+        }
+    };
+    record(0, world.positions(cloth));
+    for step in 1..=n_steps {
+        let report = world.step(dt)?;
+        stats.steps = step;
+        stats.total_iterations += report.iterations;
+        stats.max_iterations = stats.max_iterations.max(report.iterations);
+        stats.max_stretch = stats.max_stretch.max(report.max_stretch);
+        stats.unconverged_steps += usize::from(!report.converged);
+        if step % stride == 0 || step == n_steps {
+            record(step, world.positions(cloth));
+        }
+    }
+    let markers = match &ids {
+        Some(ids) => {
+            let frames = mesh_frames
+                .iter()
+                .map(|frame| ids.iter().map(|&id| frame[id as usize]).collect())
+                .collect();
+            Some(MarkerRecording::new(t, ids.clone(), frames)?)
+        }
+        None => None,
+    };
+    Ok(ClothRun {
+        scene: scene.name.clone(),
+        markers,
+        mesh_frames,
+        triangles: mesh.triangles,
+        edges: mesh.edges,
+        stats,
+    })
+}
+
+fn check_positive(name: &'static str, value: f64) -> Result<()> {
+    if value > 0.0 && value.is_finite() {
+        Ok(())
+    } else {
+        Err(ClothError::BadParameter {
+            name,
+            expected: "positive and finite",
+            value,
+        })
+    }
+}
+
+/// Writes a run as MCAP: markers, the mesh as `foxglove.SceneUpdate`, a static
+/// `foxglove.FrameTransform` (see the [module docs](self)).
+///
+/// # Errors
+///
+/// [`ClothError::NoMarkerFrames`] for a run without recorded frames; [`ClothError::Core`]
+/// when writing fails.
+pub fn write_run_mcap(
+    run: &ClothRun,
+    writer: impl Write + Seek,
+    compression: McapCompression,
+) -> Result<()> {
+    let Some(markers) = &run.markers else {
+        return Err(ClothError::NoMarkerFrames { path: None });
+    };
+    let mut out = McapWriter::new(writer, compression)?;
+    let tf = out.add_json_channel(
+        TF_TOPIC,
+        "foxglove.FrameTransform",
+        &object_schema("foxglove.FrameTransform"),
+    )?;
+    let scene = out.add_json_channel(
+        CLOTH_TOPIC,
+        "foxglove.SceneUpdate",
+        &object_schema("foxglove.SceneUpdate"),
+    )?;
+    let channel = add_markers_channel(&mut out)?;
+    let t0 = markers.t()[0];
+    out.write_json(tf, 0.0, &frame_transform(0.0))?;
+    let triangle_indices: Vec<u32> = run.triangles.iter().flatten().copied().collect();
+    let edge_indices: Vec<u32> = run.edges.iter().flatten().copied().collect();
+    for ((&t, frame), mesh) in markers
+        .t()
+        .iter()
+        .zip(markers.positions())
+        .zip(&run.mesh_frames)
+    {
+        let update = scene_update(&run.scene, t - t0, mesh, &triangle_indices, &edge_indices);
+        out.write_json(scene, t - t0, &update)?;
+        write_markers_frame(&mut out, channel, t - t0, markers.ids(), frame)?;
+    }
+    out.finish()?;
+    Ok(())
+}
+
+/// Writes a run to a file by extension: `.csv` the markers ([`write_markers_csv_path`]),
+/// `.mcap` everything ([`write_run_mcap`], zstd).
+///
+/// # Errors
+///
+/// [`ClothError::Core`] for another extension (nothing is written) or when writing fails;
+/// [`ClothError::NoMarkerFrames`] for a run without recorded frames.
+pub fn write_run_path(run: &ClothRun, path: &Path) -> Result<()> {
+    let format = Format::from_path(path)?;
+    let Some(markers) = &run.markers else {
+        return Err(ClothError::NoMarkerFrames {
+            path: Some(path.to_path_buf()),
+        });
+    };
+    match format {
+        Format::Csv => write_markers_csv_path(markers, path),
+        Format::Mcap => {
+            let file = File::create(path).map_err(|e| CoreError::io(e, Some(path)))?;
+            write_run_mcap(run, BufWriter::new(file), McapCompression::Zstd)
+                .map_err(|e| e.with_path(path))
+        }
+    }
+}
+
+/// A minimal JSON schema naming a Foxglove message type (Foxglove picks the panel by the
+/// schema name; the fields are those of its published schemas).
+fn object_schema(title: &str) -> serde_json::Value {
+    serde_json::json!({
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "title": title,
+        "type": "object",
+    })
+}
+
+/// A Foxglove `Time`: whole seconds and nanoseconds.
+fn time(t: f64) -> serde_json::Value {
+    let ns = (t.max(0.0) * 1e9).round() as u64;
+    serde_json::json!({ "sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000 })
+}
+
+/// Turns the simulation's +y (up) into Foxglove's +z (up): +90° about x.
+fn y_up_to_z_up() -> serde_json::Value {
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    serde_json::json!({ "x": h, "y": 0.0, "z": 0.0, "w": h })
+}
+
+fn frame_transform(t: f64) -> serde_json::Value {
+    serde_json::json!({
+        "timestamp": time(t),
+        "parent_frame_id": WORLD_FRAME,
+        "child_frame_id": CLOTH_FRAME,
+        "translation": { "x": 0.0, "y": 0.0, "z": 0.0 },
+        "rotation": y_up_to_z_up(),
+    })
+}
+
+fn scene_update(
+    name: &str,
+    t: f64,
+    mesh: &[[f64; 3]],
+    triangle_indices: &[u32],
+    edge_indices: &[u32],
+) -> serde_json::Value {
+    let points: Vec<serde_json::Value> = mesh
+        .iter()
+        .map(|&[x, y, z]| serde_json::json!({ "x": x, "y": y, "z": z }))
+        .collect();
+    let pose = serde_json::json!({
+        "position": { "x": 0.0, "y": 0.0, "z": 0.0 },
+        "orientation": y_up_to_z_up(),
+    });
+    let triangles = serde_json::json!({
+        "pose": pose,
+        "points": points,
+        "color": { "r": 0.25, "g": 0.55, "b": 0.9, "a": 0.85 },
+        "colors": [],
+        "indices": triangle_indices,
+    });
+    let lines = serde_json::json!({
+        "type": 2, // LINE_LIST: each pair of indices is a segment
+        "pose": pose,
+        "thickness": 1.0,
+        "scale_invariant": true,
+        "points": points,
+        "color": { "r": 0.1, "g": 0.1, "b": 0.2, "a": 1.0 },
+        "colors": [],
+        "indices": edge_indices,
+    });
+    serde_json::json!({
+        "deletions": [],
+        "entities": [{
+            "timestamp": time(t),
+            "frame_id": WORLD_FRAME,
+            "id": "cloth",
+            "lifetime": { "sec": 0, "nsec": 0 },
+            "frame_locked": false,
+            "metadata": [{ "key": "scene", "value": name }],
+            "arrows": [],
+            "cubes": [],
+            "spheres": [],
+            "cylinders": [],
+            "lines": [lines],
+            "triangles": [triangles],
+            "texts": [],
+            "models": [],
+        }],
+    })
+}

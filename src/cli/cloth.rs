@@ -1,0 +1,365 @@
+//! `modelgap cloth`: run a cloth scene and write its trajectory (`run`), or time the solver
+//! on a scene (`bench`).
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context as _;
+use clap::{Args, Subcommand, ValueEnum};
+use modelgap::cloth::Method;
+use modelgap::cloth::scenes::{self, Scene};
+use modelgap::cloth::trajectory::{
+    ClothRun, MarkerSelection, RunOptions, RunStats, run_scene, write_run_path,
+};
+use modelgap::io::Format;
+use serde::Serialize;
+
+use super::BadInput;
+use super::format::num;
+
+/// The built-in scene names, for messages.
+const BUILT_IN: &str = "corner, two-corners, drape";
+
+/// The `modelgap cloth` subcommands.
+#[derive(Debug, Subcommand)]
+pub enum ClothCommand {
+    /// Run a scene and write the marker trajectory (.csv) or markers, mesh and transforms
+    /// for Foxglove (.mcap)
+    Run(RunArgs),
+    /// Time the cloth solver on a scene (one thread): iterations, stretch, x real time
+    Bench(BenchArgs),
+}
+
+/// Arguments of `modelgap cloth run`.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// A scene file (.toml) or a built-in scene: corner, two-corners, drape
+    #[arg(long, value_name = "SCENE")]
+    scene: String,
+
+    /// Write the trajectory to this file: .csv (markers) or .mcap (markers, mesh, /tf)
+    #[arg(long, value_name = "FILE")]
+    out: PathBuf,
+
+    /// Simulated time (s) [default: the scene's]
+    #[arg(long, value_name = "T", value_parser = parse_positive)]
+    duration: Option<f64>,
+
+    /// Frames per second written (Hz) [default: one per step]
+    #[arg(long, value_name = "HZ", value_parser = parse_positive)]
+    rate: Option<f64>,
+
+    /// The vertices written as markers: `all` or ids (vertex indices) separated by commas
+    #[arg(long, value_name = "ID,ID,...|all", default_value = "all", value_parser = parse_markers)]
+    markers: MarkerSelection,
+
+    /// Constraint solver [default: the scene's, gauss-seidel]
+    #[arg(long, value_enum)]
+    method: Option<MethodArg>,
+}
+
+/// The constraint solver (`--method`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum MethodArg {
+    /// The paper's iteration, one constraint at a time
+    GaussSeidel,
+    /// All constraints at once, sparse Cholesky (fast, exact)
+    Newton,
+}
+
+impl From<MethodArg> for Method {
+    fn from(m: MethodArg) -> Method {
+        match m {
+            MethodArg::GaussSeidel => Method::GaussSeidel,
+            MethodArg::Newton => Method::Newton,
+        }
+    }
+}
+
+/// Arguments of `modelgap cloth bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// A scene file (.toml) or a built-in scene: corner, two-corners, drape
+    #[arg(long, value_name = "SCENE")]
+    scene: String,
+
+    /// Vertices along x (the scene's grid is resized, pins kept at their places)
+    #[arg(long, value_name = "N", requires = "nz")]
+    nx: Option<usize>,
+
+    /// Vertices along z
+    #[arg(long, value_name = "N", requires = "nx")]
+    nz: Option<usize>,
+
+    /// Simulated time (s) [default: the scene's]
+    #[arg(long, value_name = "T", value_parser = parse_positive)]
+    duration: Option<f64>,
+
+    /// Constraint solver [default: the scene's, gauss-seidel]
+    #[arg(long, value_enum)]
+    method: Option<MethodArg>,
+
+    /// Print JSON instead of text
+    #[arg(long)]
+    json: bool,
+}
+
+/// Runs a `modelgap cloth` subcommand.
+///
+/// # Errors
+///
+/// An unknown scene or unreadable scene file, a marker id past the mesh, an unwritable output
+/// file, a solver error.
+pub fn run(command: &ClothCommand) -> anyhow::Result<()> {
+    match command {
+        ClothCommand::Run(args) => run_cmd(args),
+        ClothCommand::Bench(args) => bench(args),
+    }
+}
+
+fn run_cmd(args: &RunArgs) -> anyhow::Result<()> {
+    // Refuse an unknown extension before the simulation, not after it.
+    Format::from_path(&args.out)
+        .with_context(|| format!("choosing the format of {}", args.out.display()))?;
+    let mut scene = load_scene(&args.scene)?;
+    if let Some(m) = args.method {
+        scene.params.method = m.into();
+    }
+    let options = RunOptions {
+        duration: args.duration,
+        rate: args.rate,
+        markers: args.markers.clone(),
+    };
+    let start = Instant::now();
+    let run = run_scene(&scene, &options)
+        .map_err(|e| bad_input_if_user(e, &scene.name))
+        .with_context(|| format!("running scene {}", scene.name))?;
+    let wall = start.elapsed().as_secs_f64();
+    write_run_path(&run, &args.out).with_context(|| format!("writing {}", args.out.display()))?;
+    super::print(&run_summary(&run, wall, &args.out))
+}
+
+fn run_summary(run: &ClothRun, wall_s: f64, out: &Path) -> String {
+    let st = &run.stats;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "scene {}: {} particles, {} constraints, {} steps of {} s ({} s simulated)",
+        run.scene,
+        st.n_particles,
+        st.n_constraints,
+        st.steps,
+        num(st.dt),
+        num(st.simulated()),
+    );
+    let _ = writeln!(
+        s,
+        "worst stretch {:.3e} ({} of {} steps converged), iterations mean {:.1}, max {}",
+        st.max_stretch,
+        st.steps - st.unconverged_steps,
+        st.steps,
+        st.mean_iterations(),
+        st.max_iterations,
+    );
+    let _ = writeln!(
+        s,
+        "wall time {:.3} s, {} x real time",
+        wall_s,
+        real_time_factor(st, wall_s).map_or_else(|| "-".to_owned(), |x| format!("{x:.2}")),
+    );
+    if let Some(m) = &run.markers {
+        let _ = writeln!(
+            s,
+            "wrote {} frames of {} markers to {}",
+            m.n_frames(),
+            m.n_markers(),
+            out.display()
+        );
+    }
+    s
+}
+
+/// Simulated time over wall time; `None` when the wall time is too short to measure.
+fn real_time_factor(stats: &RunStats, wall_s: f64) -> Option<f64> {
+    (wall_s > 0.0).then(|| stats.simulated() / wall_s)
+}
+
+/// Everything `bench --json` prints.
+#[derive(Debug, Serialize)]
+struct BenchReport {
+    scene: String,
+    particles: usize,
+    constraints: usize,
+    steps: usize,
+    dt_s: f64,
+    simulated_s: f64,
+    max_stretch: f64,
+    mean_iterations: f64,
+    max_iterations: usize,
+    unconverged_steps: usize,
+    wall_s: f64,
+    x_real_time: Option<f64>,
+    threads: usize,
+    method: &'static str,
+}
+
+fn bench(args: &BenchArgs) -> anyhow::Result<()> {
+    let mut scene = load_scene(&args.scene)?;
+    if let (Some(nx), Some(nz)) = (args.nx, args.nz) {
+        scene = scene
+            .resized(nx, nz)
+            .map_err(|e| BadInput(e.to_string()))
+            .context("resizing the scene's grid")?;
+    }
+    if let Some(m) = args.method {
+        scene.params.method = m.into();
+    }
+    let options = RunOptions {
+        duration: args.duration,
+        markers: MarkerSelection::None,
+        ..RunOptions::default()
+    };
+    let start = Instant::now();
+    let run = run_scene(&scene, &options)
+        .map_err(|e| bad_input_if_user(e, &scene.name))
+        .with_context(|| format!("running scene {}", scene.name))?;
+    let wall_s = start.elapsed().as_secs_f64();
+    let st = run.stats;
+    let report = BenchReport {
+        scene: run.scene,
+        particles: st.n_particles,
+        constraints: st.n_constraints,
+        steps: st.steps,
+        dt_s: st.dt,
+        simulated_s: st.simulated(),
+        max_stretch: st.max_stretch,
+        mean_iterations: st.mean_iterations(),
+        max_iterations: st.max_iterations,
+        unconverged_steps: st.unconverged_steps,
+        wall_s,
+        x_real_time: real_time_factor(&st, wall_s),
+        threads: 1,
+        method: match scene.params.method {
+            Method::Newton => "newton",
+            _ => "gauss-seidel",
+        },
+    };
+    if args.json {
+        let mut text = serde_json::to_string_pretty(&report).context("writing the JSON")?;
+        text.push('\n');
+        return super::print(&text);
+    }
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "scene {}: {} particles, {} constraints, {} steps of {} s, one thread",
+        report.scene,
+        report.particles,
+        report.constraints,
+        report.steps,
+        num(report.dt_s)
+    );
+    let _ = writeln!(
+        s,
+        "max stretch {:.3e}, iterations mean {:.1}, max {}, {} steps unconverged",
+        report.max_stretch, report.mean_iterations, report.max_iterations, report.unconverged_steps
+    );
+    let _ = writeln!(
+        s,
+        "wall time {:.3} s for {} s simulated: {} x real time",
+        report.wall_s,
+        num(report.simulated_s),
+        report
+            .x_real_time
+            .map_or_else(|| "-".to_owned(), |x| format!("{x:.2}"))
+    );
+    super::print(&s)
+}
+
+/// A scene from a file (a path that exists, or ends in `.toml`) or a built-in name.
+fn load_scene(name: &str) -> anyhow::Result<Scene> {
+    let path = Path::new(name);
+    if path.exists() || name.ends_with(".toml") {
+        if !path.exists() {
+            return Err(BadInput(format!("scene file {name} not found")).into());
+        }
+        return Scene::from_path(path)
+            .map_err(|e| BadInput(e.to_string()))
+            .with_context(|| format!("reading scene {name}"));
+    }
+    scenes::by_name(name).map_err(|_| {
+        BadInput(format!(
+            "unknown scene '{name}': expected a built-in scene ({BUILT_IN}) or a .toml file"
+        ))
+        .into()
+    })
+}
+
+/// Errors the user can fix (a bad option value, a marker past the mesh, a marker file)
+/// become [`BadInput`]; solver failures stay as they are.
+fn bad_input_if_user(e: modelgap::cloth::ClothError, scene: &str) -> anyhow::Error {
+    use modelgap::cloth::ClothError as E;
+    match e {
+        E::NonFinite { .. } | E::BadTimeStep { .. } => anyhow::Error::new(e),
+        other => BadInput(format!("scene {scene}: {other}")).into(),
+    }
+}
+
+/// Parses a finite number > 0.
+fn parse_positive(text: &str) -> Result<f64, String> {
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("expected a number, found '{text}'"))?;
+    if v > 0.0 && v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("expected a finite number > 0, found {v}"))
+    }
+}
+
+/// Parses `all` or vertex ids separated by commas.
+fn parse_markers(text: &str) -> Result<MarkerSelection, String> {
+    if text.trim().eq_ignore_ascii_case("all") {
+        return Ok(MarkerSelection::All);
+    }
+    let mut ids = Vec::new();
+    for part in text.split(',') {
+        let part = part.trim();
+        let id: u32 = part.parse().map_err(|_| {
+            format!(
+                "expected `all` or vertex ids (whole numbers) separated by commas, found '{part}'"
+            )
+        })?;
+        if ids.contains(&id) {
+            return Err(format!("vertex id {id} is listed twice"));
+        }
+        ids.push(id);
+    }
+    Ok(MarkerSelection::Ids(ids))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn markers_parse_all_or_ids() {
+        assert_eq!(parse_markers("all").unwrap(), MarkerSelection::All);
+        assert_eq!(
+            parse_markers("0, 29,899").unwrap(),
+            MarkerSelection::Ids(vec![0, 29, 899])
+        );
+        assert!(parse_markers("0,x").is_err());
+        assert!(parse_markers("3,3").is_err());
+        assert!(parse_markers("").is_err());
+    }
+
+    #[test]
+    fn unknown_scene_names_the_built_ins() {
+        let e = load_scene("nope").unwrap_err();
+        assert!(e.to_string().contains(BUILT_IN), "{e}");
+        assert_eq!(super::super::exit_code(&e), 2);
+    }
+}
