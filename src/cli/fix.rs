@@ -8,7 +8,6 @@ use std::path::{Path, PathBuf};
 use anyhow::Context as _;
 use clap::Args;
 use modelgap::bond::file::read_model_path;
-use modelgap::report::format_number as num;
 use modelgap::story::{explanation_text, verdict_sentence};
 use modelgap::{Effect, EffectKind, Explanation, Model as _, RankedCandidate, Verdict};
 
@@ -227,16 +226,11 @@ pub fn effect_line(r: &RankedCandidate) -> String {
         .params
         .iter()
         .map(|p| {
+            let text = modelgap::story::param_text(p);
             if p.std_error.is_finite() {
-                format!(
-                    "{} = {} ± {} {}",
-                    p.name,
-                    num(p.value),
-                    num(p.std_error),
-                    p.unit
-                )
+                text
             } else {
-                format!("{} = {} {} (at a bound)", p.name, num(p.value), p.unit)
+                format!("{text} (at a bound)")
             }
         })
         .collect();

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use crate::compare::Comparison;
 use crate::error::Result;
-use crate::explain::{Explanation, Verdict};
+use crate::explain::{Explanation, FittedParam, Verdict};
 use crate::report::{
     ComparisonChannels, RankingBar, Report, ResidualPlot, SeriesPlot, format_number,
     write_comparison_mcap, write_html,
@@ -14,6 +14,22 @@ use crate::report::{
 
 fn num(v: f64) -> String {
     format_number(v)
+}
+
+/// A fitted parameter as `name = value ± std_error unit` (no `±` when the
+/// error is not determined, e.g. at a bound).
+pub fn param_text(p: &FittedParam) -> String {
+    if p.std_error.is_finite() {
+        format!(
+            "{} = {} ± {} {}",
+            p.name,
+            num(p.value),
+            num(p.std_error),
+            p.unit
+        )
+    } else {
+        format!("{} = {} {}", p.name, num(p.value), p.unit)
+    }
 }
 
 /// The verdict as one sentence.
@@ -110,23 +126,7 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
         num(ex.effective_samples)
     );
     for (i, r) in ex.ranked.iter().take(top).enumerate() {
-        let params: Vec<String> = r
-            .params
-            .iter()
-            .map(|p| {
-                if p.std_error.is_finite() {
-                    format!(
-                        "{} = {} ± {} {}",
-                        p.name,
-                        num(p.value),
-                        num(p.std_error),
-                        p.unit
-                    )
-                } else {
-                    format!("{} = {} {}", p.name, num(p.value), p.unit)
-                }
-            })
-            .collect();
+        let params: Vec<String> = r.params.iter().map(param_text).collect();
         let rms: Vec<String> = ex
             .outputs
             .iter()
@@ -258,23 +258,7 @@ pub fn build_report(
     }
     if let Some(ex) = explanation {
         for c in &ex.chosen {
-            let params: Vec<String> = c
-                .params
-                .iter()
-                .map(|p| {
-                    if p.std_error.is_finite() {
-                        format!(
-                            "{} = {} ± {} {}",
-                            p.name,
-                            num(p.value),
-                            num(p.std_error),
-                            p.unit
-                        )
-                    } else {
-                        format!("{} = {} {}", p.name, num(p.value), p.unit)
-                    }
-                })
-                .collect();
+            let params: Vec<String> = c.params.iter().map(param_text).collect();
             // Names often say where already ("Coulomb friction on the shaft (1m)").
             let place = if c.candidate.name.contains(&c.candidate.acts_on) {
                 String::new()
