@@ -1,8 +1,14 @@
 //! Benchmarks of the cloth solver: one step of each reference scene (30 × 30,
-//! 900 particles, 1740 constraints) with the global Newton solve, one
-//! Gauss–Seidel step (the any-time method, capped at 100 sweeps), and a step
-//! of a 100 × 100 grid. Read a step's time against `h` = 10 ms of simulated
-//! time: under 2 ms is five times real time.
+//! 900 particles, 1740 constraints) with the global Newton solve; one
+//! Gauss–Seidel sweep, serial and coloured, on the 30 × 30 corner and a
+//! 300 × 300 grid; and a step of the corner scene resized to 100 × 100 and
+//! 300 × 300 (Newton on 100 × 100; Gauss–Seidel, serial and coloured on one
+//! and two threads, capped at [`LARGE_SWEEPS`] sweeps). Read a step's time
+//! against `h` = 10 ms of simulated time: under 2 ms is five times real time.
+//!
+//! The coloured sweep runs inside a rayon pool of the thread count in the id
+//! (`coloured/1t`, `coloured/2t`); its result is the same on any number of
+//! threads, so the ids time the same work.
 #![allow(clippy::unwrap_used)] // benches: setup failures should abort
 
 use std::hint::black_box;
@@ -16,6 +22,21 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 /// Steps run before timing, so the cloth is hanging or draping, not flat.
 const SETTLE_STEPS: usize = 30;
+
+/// Sweeps per step on the 100 × 100 and 300 × 300 grids: Gauss–Seidel does
+/// not reach 1e-4 there within a bench's patience, so a step is this many
+/// sweeps (the time per sweep is what the ids compare).
+const LARGE_SWEEPS: usize = 100;
+
+/// Steps run before timing the large grids (short: setup runs in `cargo test` too).
+const LARGE_SETTLE_STEPS: usize = 3;
+
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+}
 
 fn scene_steps(c: &mut Criterion) {
     for (id, scene) in [
@@ -33,19 +54,60 @@ fn scene_steps(c: &mut Criterion) {
     }
 }
 
-fn sweep(c: &mut Criterion) {
-    let scene = scenes::corner();
+/// The corner scene on an `n` × `n` grid after `settle` steps of `sweeps`
+/// Gauss–Seidel sweeps at most, coloured or not.
+fn corner_world(n: usize, coloured: bool, sweeps: usize, settle: usize) -> (ClothWorld, f64) {
+    let scene = scenes::corner().resized(n, n).unwrap();
     let (mut world, _) = scene.build().unwrap();
-    world.step_n(SETTLE_STEPS, scene.dt).unwrap();
     world.params_mut().method = Method::GaussSeidel;
-    world.params_mut().max_iterations = 1;
-    world.params_mut().warm_start = false;
-    c.bench_function("cloth/sweep/30x30/corner", |b| {
-        b.iter(|| black_box(world.step(black_box(scene.dt)).unwrap()));
-    });
+    world.params_mut().coloured_sweep = coloured;
+    world.params_mut().max_iterations = sweeps;
+    world.step_n(settle, scene.dt).unwrap();
+    (world, scene.dt)
 }
 
-fn large(c: &mut Criterion) {
+/// One sweep: a step capped at one sweep without warm start (the preview,
+/// two largest-error scans and the commit come with it).
+fn sweeps(c: &mut Criterion) {
+    let mut group = c.benchmark_group("cloth/sweep");
+    for (n, settle) in [(30, SETTLE_STEPS), (300, LARGE_SETTLE_STEPS)] {
+        if n > 100 {
+            group.sample_size(10);
+        }
+        for (id, coloured, threads) in [
+            ("serial", false, 1),
+            ("coloured/1t", true, 1),
+            ("coloured/2t", true, 2),
+        ] {
+            let (mut world, dt) = corner_world(n, coloured, LARGE_SWEEPS, settle);
+            world.params_mut().max_iterations = 1;
+            world.params_mut().warm_start = false;
+            let pool = pool(threads);
+            group.bench_function(format!("{n}x{n}/corner/{id}"), |b| {
+                pool.install(|| b.iter(|| black_box(world.step(black_box(dt)).unwrap())));
+            });
+        }
+    }
+    group.finish();
+}
+
+/// One step of the corner scene on 100 × 100 and 300 × 300 grids.
+fn large_steps(c: &mut Criterion) {
+    let mut group = c.benchmark_group("cloth/step");
+    group.sample_size(10);
+    for n in [100, 300] {
+        for (id, coloured, threads) in [
+            ("gauss_seidel", false, 1),
+            ("coloured/1t", true, 1),
+            ("coloured/2t", true, 2),
+        ] {
+            let (mut world, dt) = corner_world(n, coloured, LARGE_SWEEPS, LARGE_SETTLE_STEPS);
+            let pool = pool(threads);
+            group.bench_function(format!("{n}x{n}/corner/{id}"), |b| {
+                pool.install(|| b.iter(|| black_box(world.step(black_box(dt)).unwrap())));
+            });
+        }
+    }
     let params = SolverParams {
         method: Method::Newton,
         max_iterations: 50,
@@ -56,10 +118,11 @@ fn large(c: &mut Criterion) {
         .add_cloth(GridCloth::new(100, 100, 0.01).pin(0).pin(99))
         .unwrap();
     world.step_n(5, 0.01).unwrap();
-    c.bench_function("cloth/step/100x100/two_corners", |b| {
+    group.bench_function("100x100/two_corners/newton", |b| {
         b.iter(|| black_box(world.step(black_box(0.01)).unwrap()));
     });
+    group.finish();
 }
 
-criterion_group!(benches, scene_steps, sweep, large);
+criterion_group!(benches, scene_steps, sweeps, large_steps);
 criterion_main!(benches);

@@ -169,6 +169,74 @@ fn bench_json_has_every_field() {
     assert_eq!(json["threads"], 1);
 }
 
+/// `cloth bench --json` on a 10 x 10 corner with extra arguments, parsed.
+fn bench_json(extra: &[&str]) -> serde_json::Value {
+    let mut args = vec![
+        "cloth",
+        "bench",
+        "--scene",
+        "corner",
+        "--nx",
+        "10",
+        "--nz",
+        "10",
+        "--duration",
+        "0.1",
+        "--json",
+    ];
+    args.extend_from_slice(extra);
+    serde_json::from_str(&ok(&args)).unwrap()
+}
+
+#[test]
+fn bench_threads_run_the_coloured_sweep_with_the_same_result() {
+    // Issue 4: the coloured sweep gives the same bits for any number of threads.
+    let one = bench_json(&["--threads", "1", "--tolerance", "1e-3"]);
+    let two = bench_json(&["--threads", "2", "--tolerance", "1e-3"]);
+    assert_eq!(
+        (one["threads"].as_u64(), two["threads"].as_u64()),
+        (Some(1), Some(2))
+    );
+    for json in [&one, &two] {
+        assert_eq!(json["sweep"], "coloured", "{json}");
+        assert_eq!(json["method"], "gauss-seidel", "{json}");
+        assert_eq!(json["stretch_tolerance"], 1e-3, "{json}");
+    }
+    for key in [
+        "max_stretch",
+        "mean_iterations",
+        "max_iterations",
+        "unconverged_steps",
+    ] {
+        assert_eq!(one[key], two[key], "{key}: {one} vs {two}");
+    }
+    let serial = bench_json(&[
+        "--threads",
+        "2",
+        "--sweep",
+        "serial",
+        "--max-iterations",
+        "7",
+    ]);
+    assert_eq!(serial["sweep"], "serial");
+    assert!(serial["max_iterations"].as_u64().unwrap() <= 7, "{serial}");
+    assert_eq!(bench_json(&[])["sweep"], "serial");
+}
+
+#[test]
+fn bench_rejects_zero_threads_and_a_bad_tolerance() {
+    for extra in [
+        ["--threads", "0"],
+        ["--tolerance", "-1"],
+        ["--max-iterations", "0"],
+    ] {
+        let mut args = vec!["cloth", "bench", "--scene", "corner"];
+        args.extend_from_slice(&extra);
+        let out = modelgap(&args);
+        assert_eq!(out.status.code(), Some(2), "{extra:?}");
+    }
+}
+
 #[test]
 fn unknown_scene_exits_with_2_naming_the_built_ins() {
     let dir = TempDir::new("bad");

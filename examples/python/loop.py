@@ -42,7 +42,9 @@ def main() -> None:
     after = modelgap.compare(fixed, rec)
     for b in before.outputs:
         a = after.output(b.name)
-        print(f"{b.name:>6}: RMS {b.rms:.4g} -> {a.rms:.4g} {b.unit} (noise floor {b.noise_floor:.4g})")
+        print(
+            f"{b.name:>6}: RMS {b.rms:.4g} -> {a.rms:.4g} {b.unit} (noise floor {b.noise_floor:.4g})"
+        )
 
     (out / "dc-motor-fixed.toml").write_text(fixed.to_toml())
     page = modelgap.write_report(out / "report", before, explanation, after)

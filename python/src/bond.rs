@@ -42,13 +42,38 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// # Errors
 /// `TypeError` for anything but a `modelgap.bond.BondModel`.
 pub fn model_of(obj: &Bound<'_, PyAny>) -> PyResult<Arc<dyn Model>> {
-    match obj.cast::<PyBondModel>() {
-        Ok(m) => Ok(m.borrow().model.clone()),
-        Err(_) => Err(PyTypeError::new_err(format!(
-            "model must be a modelgap.bond.BondModel, found {}",
-            obj.get_type().name()?
-        ))),
+    if let Ok(m) = obj.cast::<PyBondModel>() {
+        return Ok(m.borrow().model.clone());
     }
+    if let Ok(m) = obj.cast::<crate::cloth::PyClothModel>() {
+        return Ok(m.get().model());
+    }
+    Err(PyTypeError::new_err(format!(
+        "model must be a modelgap.bond.BondModel or a modelgap.cloth.ClothModel, found {}",
+        obj.get_type().name()?
+    )))
+}
+
+/// Candidates as dicts with ``id``, ``name``, ``kind``, ``acts_on`` and ``params`` (names).
+pub fn candidate_dicts<'py>(
+    py: Python<'py>,
+    candidates: &[modelgap::Candidate],
+) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    candidates
+        .iter()
+        .map(|c| {
+            let d = PyDict::new(py);
+            d.set_item("id", &c.id)?;
+            d.set_item("name", &c.name)?;
+            d.set_item("kind", c.kind.to_string())?;
+            d.set_item("acts_on", &c.acts_on)?;
+            d.set_item(
+                "params",
+                c.params.iter().map(|p| p.name.clone()).collect::<Vec<_>>(),
+            )?;
+            Ok(d)
+        })
+        .collect()
 }
 
 fn start_name(s: Start) -> &'static str {
@@ -368,22 +393,7 @@ impl PyBondModel {
     /// The candidate effects explain fits: dicts with ``id``, ``name``, ``kind``,
     /// ``acts_on`` and ``params`` (names).
     fn candidates<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        self.model
-            .candidates()
-            .iter()
-            .map(|c| {
-                let d = PyDict::new(py);
-                d.set_item("id", &c.id)?;
-                d.set_item("name", &c.name)?;
-                d.set_item("kind", c.kind.to_string())?;
-                d.set_item("acts_on", &c.acts_on)?;
-                d.set_item(
-                    "params",
-                    c.params.iter().map(|p| p.name.clone()).collect::<Vec<_>>(),
-                )?;
-                Ok(d)
-            })
-            .collect()
+        candidate_dicts(py, &self.model.candidates())
     }
 
     /// The causal equations (and the state equations) in the paper's notation; LaTeX

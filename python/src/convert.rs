@@ -9,6 +9,7 @@ use std::sync::mpsc;
 use std::time::Duration;
 
 use modelgap::fit::Cancel;
+use modelgap::math::Vector3;
 use modelgap::{Recording, Signal};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray as _, PyArray1, PyArray2, PyArrayDyn, PyArrayMethods as _};
@@ -38,6 +39,123 @@ pub fn vec_from_py(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
         )));
     }
     Ok(view.iter().copied().collect())
+}
+
+/// A `(n, 3)` array-like of floats (any strides, any real dtype) as 3-vectors; `what`
+/// names it in errors ("positions must be (n, 3)").
+pub fn points_from_py(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Vector3>> {
+    let arr = as_float_array(obj)?;
+    let ro = arr.readonly();
+    let view = ro.as_array();
+    match view.shape() {
+        [_, 3] => Ok(view
+            .outer_iter()
+            .map(|row| Vector3::new(row[0], row[1], row[2]))
+            .collect()),
+        shape => Err(data_error(format!(
+            "{what} must be (n, 3), found shape {shape:?}"
+        ))),
+    }
+}
+
+/// A 3-vector from any array-like of three finite floats (`what` names it in errors).
+pub fn vec3_from_py(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vector3> {
+    let v = vec_from_py(obj, what).map_err(|_| shape_error3(obj, what))?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vector3::new(*x, *y, *z)),
+        [_, _, _] => Err(data_error(format!(
+            "{what} must be three finite numbers, found {v:?}"
+        ))),
+        _ => Err(shape_error3(obj, what)),
+    }
+}
+
+fn shape_error3(obj: &Bound<'_, PyAny>, what: &str) -> PyErr {
+    let found = obj
+        .repr()
+        .map_or_else(|_| "an object".to_owned(), |r| r.to_string());
+    data_error(format!(
+        "{what} must be three numbers (x, y, z), found {found}"
+    ))
+}
+
+/// An array-like of non-negative integers below 2³² (any strides, any integer dtype), with
+/// its shape; `what` names it in errors. Floats are refused, even whole ones.
+pub fn indices_from_py(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(Vec<usize>, Vec<u32>)> {
+    let np = obj.py().import("numpy")?;
+    let arr = np.call_method1("asarray", (obj,))?;
+    let kind: String = arr.getattr("dtype")?.getattr("kind")?.extract()?;
+    let size: usize = arr.getattr("size")?.extract()?;
+    if !(kind == "i" || kind == "u" || size == 0) {
+        return Err(data_error(format!(
+            "{what} must hold integers (vertex indices), found dtype {}",
+            arr.getattr("dtype")?.str()?
+        )));
+    }
+    let arr = arr.call_method1("astype", (np.getattr("int64")?,))?;
+    let arr = arr.cast_into::<PyArrayDyn<i64>>()?;
+    let ro = arr.readonly();
+    let view = ro.as_array();
+    let mut out = Vec::with_capacity(view.len());
+    for &i in view.iter() {
+        match u32::try_from(i) {
+            Ok(v) => out.push(v),
+            Err(_) => {
+                return Err(data_error(format!(
+                    "{what} must be non-negative vertex indices below 2^32, found {i}"
+                )));
+            }
+        }
+    }
+    Ok((view.shape().to_vec(), out))
+}
+
+/// An `(m, k)` integer array-like as rows of `K` indices (`what` names it in errors).
+pub fn index_rows_from_py<const K: usize>(
+    obj: &Bound<'_, PyAny>,
+    what: &str,
+) -> PyResult<Vec<[u32; K]>> {
+    let (shape, flat) = indices_from_py(obj, what)?;
+    let empty = flat.is_empty() && shape.len() == 1;
+    if !(empty || (shape.len() == 2 && shape[1] == K)) {
+        return Err(data_error(format!(
+            "{what} must be (m, {K}), found shape {shape:?}"
+        )));
+    }
+    Ok(flat
+        .chunks_exact(K)
+        .map(|c| {
+            let mut row = [0; K];
+            row.copy_from_slice(c);
+            row
+        })
+        .collect())
+}
+
+/// A 1-D integer array-like (or list) of vertex indices (`what` names it in errors).
+pub fn index_list_from_py(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<u32>> {
+    let (shape, flat) = indices_from_py(obj, what)?;
+    if shape.len() != 1 {
+        return Err(data_error(format!(
+            "{what} must be one-dimensional (a list of vertex indices), found shape {shape:?}"
+        )));
+    }
+    Ok(flat)
+}
+
+/// Rows of `K` values as a fresh `(n, K)` numpy array of `T`.
+pub fn rows_to_array2<'py, T: numpy::Element + Copy, const K: usize>(
+    py: Python<'py>,
+    rows: &[[T; K]],
+) -> Bound<'py, PyArray2<T>> {
+    let a = Array2::from_shape_fn((rows.len(), K), |(i, j)| rows[i][j]);
+    a.into_pyarray(py)
+}
+
+/// 3-vectors as a fresh `(n, 3)` float64 array.
+pub fn points_to_array<'py>(py: Python<'py>, points: &[Vector3]) -> Bound<'py, PyArray2<f64>> {
+    let a = Array2::from_shape_fn((points.len(), 3), |(i, j)| points[i][j]);
+    a.into_pyarray(py)
 }
 
 /// A recording from a time axis, values shaped (n_samples, n_signals) and names.

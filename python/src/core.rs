@@ -36,6 +36,21 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
+/// What pickling stores of a result: TOML text, which (unlike JSON) keeps infinite
+/// standard errors and scores, and NaN, exactly as they are.
+fn to_state<T: serde::Serialize>(value: &T) -> PyResult<String> {
+    toml::to_string(value).map_err(|e| {
+        crate::errors::ModelgapError::new_err(format!(
+            "internal error (a bug in modelgap, please report it): cannot store the result: {e}"
+        ))
+    })
+}
+
+/// A result back from the text of [`to_state`] (`what` names it in errors).
+fn from_state<T: serde::de::DeserializeOwned>(state: &str, what: &str) -> PyResult<T> {
+    toml::from_str(state).map_err(|e| data_error(format!("not the stored state of {what}: {e}")))
+}
+
 /// Failure windows as `(start, end, peak)` tuples (s, s, signal unit).
 fn windows(w: &[FailureWindow]) -> Vec<(f64, f64, f64)> {
     w.iter().map(|w| (w.start, w.end, w.peak)).collect()
@@ -326,6 +341,25 @@ impl PyComparison {
     /// Where the model fails, output by output, as text.
     fn text(&self) -> String {
         comparison_text(&self.inner)
+    }
+
+    /// Restores a pickled comparison (see ``__reduce__``).
+    #[staticmethod]
+    fn _from_state(state: &str) -> PyResult<PyComparison> {
+        Ok(PyComparison {
+            inner: from_state(state, "a comparison")?,
+        })
+    }
+
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        let restore = slf.get_type().getattr("_from_state")?;
+        Ok((restore, (to_state(&slf.get().inner)?,)))
+    }
+
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other
+            .cast::<PyComparison>()
+            .is_ok_and(|o| o.get().inner == self.inner)
     }
 
     fn __repr__(&self) -> String {
@@ -660,6 +694,25 @@ impl PyExplanation {
     fn text(&self, top: usize) -> String {
         explanation_text(&self.inner, top)
     }
+
+    /// Restores a pickled explanation (see ``__reduce__``).
+    #[staticmethod]
+    fn _from_state(state: &str) -> PyResult<PyExplanation> {
+        Ok(PyExplanation {
+            inner: from_state(state, "an explanation")?,
+        })
+    }
+
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        let restore = slf.get_type().getattr("_from_state")?;
+        Ok((restore, (to_state(&slf.get().inner)?,)))
+    }
+
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other
+            .cast::<PyExplanation>()
+            .is_ok_and(|o| o.get().inner == self.inner)
+    }
     fn __repr__(&self) -> String {
         format!(
             "<Explanation {} verdict={} chosen=[{}] candidates={}>",
@@ -677,8 +730,12 @@ impl PyExplanation {
 }
 
 /// Simulates the model on the recording's inputs and holds it against its outputs.
+///
+/// ``predictability`` widens the failure band by the model's own predictability band where
+/// it has one (a cloth model near a snap), so only failures beyond it count.
 #[pyfunction(name = "compare")]
-#[pyo3(signature = (model, rec, *, noise = None, band_sigmas = 4.0, band_fraction = None, min_window = None))]
+#[pyo3(signature = (model, rec, *, noise = None, band_sigmas = 4.0, band_fraction = None, min_window = None, predictability = true))]
+#[allow(clippy::too_many_arguments)] // keyword-only options of the Python API
 fn py_compare(
     py: Python<'_>,
     model: &Bound<'_, PyAny>,
@@ -687,6 +744,7 @@ fn py_compare(
     band_sigmas: f64,
     band_fraction: Option<f64>,
     min_window: Option<f64>,
+    predictability: bool,
 ) -> PyResult<PyComparison> {
     let model = model_of(model)?;
     let opts = CompareOptions {
@@ -694,6 +752,7 @@ fn py_compare(
         band_sigmas,
         band_fraction,
         min_window,
+        predictability,
     };
     let rec = &rec.get().inner;
     let result = detached(py, move || compare(model.as_ref(), rec, &opts))?;

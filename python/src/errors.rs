@@ -5,6 +5,7 @@
 //! `ConvergenceError` for fits and steady states that do not converge.
 
 use modelgap::bond::BondError;
+use modelgap::cloth::ClothError;
 use modelgap::{CoreError, Error};
 use pyo3::exceptions::{PyException, PyValueError};
 use pyo3::prelude::*;
@@ -111,6 +112,17 @@ pub fn to_py_err(e: impl Into<Error>) -> PyErr {
             Ok(t) => PyErr::from_type(t.clone(), message),
             Err(err) => err,
         }),
+    }
+}
+
+/// Converts a cloth error into its Python exception, with the Rust message unchanged.
+///
+/// Every cloth error is about its input (a mesh, a parameter, a file, a state set from
+/// Python), so all are `DataError`s, except core errors, which map as `to_py_err` maps them.
+pub fn cloth_err(e: ClothError) -> PyErr {
+    match e {
+        ClothError::Core(c) => to_py_err(c),
+        other => data_error(other.to_string()),
     }
 }
 

@@ -53,7 +53,9 @@ def test_state_space_and_eigenvalues(motor: BondModel):
     # A is linearised by finite differences (about 1e-12 relative here): 1e-8 leaves room.
     np.testing.assert_allclose(a, expected, rtol=1e-8)
     ev = motor.eigenvalues()
-    np.testing.assert_allclose(np.sort_complex(ev), np.sort_complex(np.linalg.eigvals(a)), rtol=1e-9)
+    np.testing.assert_allclose(
+        np.sort_complex(ev), np.sort_complex(np.linalg.eigvals(a)), rtol=1e-9
+    )
     assert all(e.real < 0 for e in ev)
 
 

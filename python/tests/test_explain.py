@@ -8,7 +8,9 @@ import json
 import threading
 import time
 import pickle
-from concurrent.futures import ThreadPoolExecutor
+import multiprocessing
+import math
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -148,3 +150,36 @@ def test_ctrl_c_stops_explain():
     finally:
         timer.cancel()
     assert time.perf_counter() - start < 10.0  # the whole explain takes about 3 s here
+
+
+def test_results_pickle_with_their_infinities(
+    coulomb: Recording, coulomb_explained: modelgap.Explanation
+):
+    ex = coulomb_explained
+    back = pickle.loads(pickle.dumps(ex))
+    assert back == ex and type(back) is modelgap.Explanation
+    assert back.text() == ex.text() and back.effects == ex.effects
+    # Some candidates sit at a bound: an infinite standard error survives the round trip.
+    inf_errors = [p for r in ex.ranked for p in r.params if math.isinf(p.std_error)]
+    back_inf = [p for r in back.ranked for p in r.params if math.isinf(p.std_error)]
+    assert len(inf_errors) == len(back_inf)
+    c = modelgap.compare(BondModel.dc_motor(), coulomb)
+    again = pickle.loads(pickle.dumps(c))
+    assert again == c and again.text() == c.text()
+    with pytest.raises(modelgap.DataError, match="not the stored state of an explanation"):
+        modelgap.Explanation._from_state("verdict = 3")
+
+
+def test_explain_many_with_a_process_pool():
+    # Everything explain_many sends (model, recordings, options, explanations) pickles, so
+    # worker processes run it ("spawn": a fresh interpreter, as Dask or Ray workers are).
+    recs = [hidden_recording(c, seed=3, duration=2.0) for c in ("load", "nothing")]
+    motor = BondModel.dc_motor()
+    serial = modelgap.explain_many(motor, recs, only=["load@1m", "coulomb@1m", "deviation:R"])
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=2, mp_context=context) as pool:
+        parallel = modelgap.explain_many(
+            motor, recs, executor=pool, only=["load@1m", "coulomb@1m", "deviation:R"]
+        )
+    assert parallel == serial
+    assert parallel[0].chosen[0].id == "load@1m" and parallel[1].verdict == "nothing-missing"

@@ -27,7 +27,7 @@ pub enum ClothCommand {
     /// Run a scene and write the marker trajectory (.csv) or markers, mesh and transforms
     /// for Foxglove (.mcap)
     Run(RunArgs),
-    /// Time the cloth solver on a scene (one thread): iterations, stretch, x real time
+    /// Time the cloth solver on a scene: iterations, stretch, x real time
     Bench(BenchArgs),
 }
 
@@ -100,9 +100,35 @@ pub struct BenchArgs {
     #[arg(long, value_enum)]
     method: Option<MethodArg>,
 
+    /// Run the solver in a pool of N threads [default: 1]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    threads: Option<u16>,
+
+    /// Gauss-Seidel sweep order [default: coloured when --threads is given, else serial]
+    #[arg(long, value_enum)]
+    sweep: Option<SweepArg>,
+
+    /// Allowed relative stretch per step [default: the scene's, 1e-4]
+    #[arg(long, value_name = "REL", value_parser = parse_positive)]
+    tolerance: Option<f64>,
+
+    /// Iteration limit per step (sweeps or Newton solves) [default: 1000]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    max_iterations: Option<u32>,
+
     /// Print JSON instead of text
     #[arg(long)]
     json: bool,
+}
+
+/// The Gauss–Seidel sweep order (`--sweep`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum SweepArg {
+    /// Constraint after constraint in index order (the paper's)
+    Serial,
+    /// Colour by colour, each large colour's constraints in parallel; the same result for
+    /// any number of threads
+    Coloured,
 }
 
 /// Runs a `modelgap cloth` subcommand.
@@ -202,6 +228,9 @@ struct BenchReport {
     x_real_time: Option<f64>,
     threads: usize,
     method: &'static str,
+    /// `serial` or `coloured`: the Gauss–Seidel sweep order.
+    sweep: &'static str,
+    stretch_tolerance: f64,
 }
 
 fn bench(args: &BenchArgs) -> anyhow::Result<()> {
@@ -215,13 +244,29 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     if let Some(m) = args.method {
         scene.params.method = m.into();
     }
+    if let Some(tol) = args.tolerance {
+        scene.params.stretch_tolerance = tol;
+    }
+    if let Some(n) = args.max_iterations {
+        scene.params.max_iterations = n as usize;
+    }
+    let threads = args.threads.map_or(1, usize::from);
+    scene.params.coloured_sweep = match args.sweep {
+        Some(sweep) => sweep == SweepArg::Coloured,
+        None => args.threads.is_some() || scene.params.coloured_sweep,
+    };
     let options = RunOptions {
         duration: args.duration,
         markers: MarkerSelection::None,
         ..RunOptions::default()
     };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .with_context(|| format!("starting a pool of {threads} threads"))?;
     let start = Instant::now();
-    let run = run_scene(&scene, &options)
+    let run = pool
+        .install(|| run_scene(&scene, &options))
         .map_err(|e| bad_input_if_user(e, &scene.name))
         .with_context(|| format!("running scene {}", scene.name))?;
     let wall_s = start.elapsed().as_secs_f64();
@@ -239,11 +284,17 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         unconverged_steps: st.unconverged_steps,
         wall_s,
         x_real_time: real_time_factor(&st, wall_s),
-        threads: 1,
+        threads,
         method: match scene.params.method {
             Method::Newton => "newton",
             _ => "gauss-seidel",
         },
+        sweep: if scene.params.coloured_sweep {
+            "coloured"
+        } else {
+            "serial"
+        },
+        stretch_tolerance: scene.params.stretch_tolerance,
     };
     if args.json {
         let mut text = serde_json::to_string_pretty(&report).context("writing the JSON")?;
@@ -253,12 +304,25 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "scene {}: {} particles, {} constraints, {} steps of {} s, one thread",
+        "scene {}: {} particles, {} constraints, {} steps of {} s",
         report.scene,
         report.particles,
         report.constraints,
         report.steps,
         num(report.dt_s)
+    );
+    let _ = writeln!(
+        s,
+        "{}{}, tolerance {:e}, {} thread{}",
+        report.method,
+        if scene.params.method == Method::Newton {
+            String::new()
+        } else {
+            format!(" ({} sweep)", report.sweep)
+        },
+        report.stretch_tolerance,
+        report.threads,
+        if report.threads == 1 { "" } else { "s" }
     );
     let _ = writeln!(
         s,

@@ -30,6 +30,9 @@ pub struct CompareArgs {
 /// Model and recording errors (see [`super::report::load_loop`]), a model that cannot
 /// simulate the recording, a report that cannot be written.
 pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
+    if let Some(scene) = super::cloth_loop::scene_file(&args.common) {
+        return super::cloth_loop::compare_command(args, &scene);
+    }
     let loaded = load_loop(&args.common)?;
     let before = run_compare(&loaded.model, &loaded)?;
     let page = match &args.common.report {

@@ -1,15 +1,21 @@
 //! `modelgap demo`: the main job on bundled data. A DC-motor recording hides a physical
 //! effect the built-in model lacks; the demo shows where the model fails, ranks the effects
 //! that could be missing, adds the chosen one with its fitted value and shows the error
-//! fall, writes the report, and ends with the DC-motor paper's Table 7 diagnosis.
+//! fall, and writes the report. Then the same loop on cloth: a marker recording of a
+//! swinging cloth hides air drag; the demo shows which markers, regions and times the scene
+//! gets wrong, names the missing effect, adds it and writes the cloth report (per-vertex
+//! error map, error over time, the mesh coloured by error for Foxglove). It ends with the
+//! DC-motor paper's Table 7 diagnosis.
 //!
-//! The recording (`examples/data/motor_hidden_effect.csv`, made by
-//! `cargo run --example make_demo_data`) is embedded at compile time, so the demo runs
-//! from any directory. Every number printed comes from this run; the hidden truth printed
-//! at the end is [`demo_case`], and a test checks that the bundled file is still the
-//! recording of that case.
+//! The recordings (`examples/data/motor_hidden_effect.csv`, made by
+//! `cargo run --example make_demo_data`; `examples/data/cloth_hidden_effect.csv` and its
+//! scene `examples/data/cloth_scene.toml`, made by
+//! `cargo run --example make_cloth_demo_data`) are embedded at compile time, so the demo
+//! runs from any directory. Every number printed comes from this run; the hidden truths
+//! printed are [`demo_case`] and [`cloth_demo_case`], and tests check that the bundled
+//! files are still the recordings of those cases.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 use clap::Args;
@@ -20,8 +26,23 @@ use modelgap::report::format_number as num;
 use modelgap::story::{comparison_text, explanation_text};
 use modelgap::{Effect, Model as _, RankedCandidate, Recording};
 
+use modelgap::cloth::hidden::{
+    Hidden as ClothHidden, HiddenCase as ClothCase, RecordingOptions, SWING_AMPLITUDE,
+    SWING_FREQUENCY, cases as cloth_cases,
+};
+use modelgap::cloth::markers::read_markers_csv;
+use modelgap::cloth::report::{
+    before_after_text as cloth_before_after_text, comparison_text as cloth_comparison_text,
+    explanation_text as cloth_explanation_text,
+};
+use modelgap::cloth::scenes::Scene;
+
+use super::cloth_loop::{
+    ClothLoaded, ClothReport, with_effects, write_report as write_cloth_report,
+};
 use super::report::{
-    Loaded, ReportParts, before_after_text, report_line, run_compare, run_explain, write_report,
+    Loaded, ReportParts, before_after_text, report_line, run_compare, run_explain,
+    run_explain_model, write_report,
 };
 
 /// The bundled recording, as CSV text.
@@ -33,6 +54,21 @@ const DEMO_PATH: &str = "examples/data/motor_hidden_effect.csv";
 /// Ranked candidates shown.
 const TOP: usize = 6;
 
+/// The bundled cloth recording, as marker CSV text.
+const CLOTH_CSV: &str = include_str!("../../examples/data/cloth_hidden_effect.csv");
+
+/// Where the bundled cloth recording lives in the repository.
+const CLOTH_CSV_PATH: &str = "examples/data/cloth_hidden_effect.csv";
+
+/// The bundled cloth scene (the model), as scene-file text.
+const CLOTH_SCENE: &str = include_str!("../../examples/data/cloth_scene.toml");
+
+/// Where the bundled cloth scene lives in the repository.
+const CLOTH_SCENE_PATH: &str = "examples/data/cloth_scene.toml";
+
+/// Vertices per side of the demo cloth (as `examples/make_cloth_demo_data.rs`).
+const CLOTH_GRID: usize = 7;
+
 /// Arguments of `modelgap demo`.
 #[derive(Debug, Args)]
 pub struct DemoArgs {
@@ -40,7 +76,11 @@ pub struct DemoArgs {
     #[arg(long, value_name = "DIR", default_value = "modelgap-report")]
     pub report: PathBuf,
 
-    /// Leave out the second part, the DC-motor paper's Table 7 diagnosis
+    /// Leave out the cloth part, the loop on a bundled cloth marker recording
+    #[arg(long)]
+    pub skip_cloth: bool,
+
+    /// Leave out the last part, the DC-motor paper's Table 7 diagnosis
     #[arg(long)]
     pub skip_table7: bool,
 }
@@ -67,6 +107,31 @@ pub fn demo_case() -> HiddenCase {
         }],
         drive_scale: 1.0,
     }
+}
+
+/// The hidden-effect case the bundled cloth recording was made from, as in
+/// `examples/make_cloth_demo_data.rs`: the `drag` case of `modelgap::cloth::hidden` on a
+/// 7 × 7 swing scene held by clips on every other vertex of its top row (air drag with
+/// C_d = 0.8 the scene does not have).
+///
+/// # Errors
+///
+/// The case is gone from `modelgap::cloth::hidden`.
+pub fn cloth_demo_case() -> anyhow::Result<ClothCase> {
+    let mut case = cloth_cases(CLOTH_GRID, CLOTH_GRID)
+        .into_iter()
+        .find(|c| c.name == "drag")
+        .context("the `drag` case of modelgap::cloth::hidden is gone")?;
+    // Held by clips: of the top row only the even columns stay pinned.
+    let nx = case.scene.cloth.nx as u32;
+    let clip = |v: u32| v >= nx || v % 2 == 0;
+    case.scene.cloth.pinned.retain(|&v| clip(v));
+    case.scene.pin_paths.retain(|(v, _)| clip(*v));
+    case.scene.description = format!(
+        "{n} x {n} cloth hanging from clips on every other vertex of its top row, swung 0.1 m at 1 Hz",
+        n = case.scene.cloth.nx
+    );
+    Ok(case)
 }
 
 /// Runs the demo and prints its story.
@@ -166,13 +231,18 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     );
     super::print(&out)?;
 
-    // 6. Table 7.
+    // 6. Cloth.
+    if !args.skip_cloth {
+        cloth_story(&args.report.join("cloth"))?;
+    }
+
+    // 7. Table 7.
     if args.skip_table7 {
         return Ok(());
     }
     let rows = table7(&Table7Options::default()).context("running the Table 7 faults")?;
     let mut out = String::from(
-        "\n6. The DC-motor paper's Table 7 (bond-graph fault diagnosis of a buck converter feeding the\n   \
+        "\n7. The DC-motor paper's Table 7 (bond-graph fault diagnosis of a buck converter feeding the\n   \
          motor): each ±20 % fault simulated, detected against the 2 % band, diagnosed by fault trees\n   \
          and temporal signatures, beside the paper's answer:\n\n",
     );
@@ -183,6 +253,132 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
          examples/data/dc_motor_r_fault.csv --steady-start`.\n",
     );
     super::print(&out)
+}
+
+/// The bundled cloth scene and markers, loaded.
+///
+/// # Errors
+///
+/// The embedded files do not read (a build with a broken data file).
+pub fn cloth_demo_loaded() -> anyhow::Result<ClothLoaded> {
+    let scene = Scene::from_toml(CLOTH_SCENE, CLOTH_SCENE_PATH)
+        .with_context(|| format!("reading the bundled scene {CLOTH_SCENE_PATH}"))?;
+    let markers = read_markers_csv(CLOTH_CSV.as_bytes())
+        .with_context(|| format!("reading the bundled markers {CLOTH_CSV_PATH}"))?;
+    ClothLoaded::new(scene, markers, CLOTH_CSV_PATH)
+}
+
+/// Part 6: the loop on the bundled cloth recording; writes the cloth report into `dir`.
+///
+/// # Errors
+///
+/// A report that cannot be written; simulation errors (none for the bundled data).
+fn cloth_story(dir: &Path) -> anyhow::Result<()> {
+    let loaded = cloth_demo_loaded()?;
+    let case = cloth_demo_case()?;
+    let scene = loaded.scene();
+    let width = scene.cloth.spacing * (scene.cloth.nx - 1) as f64;
+    let mut out = format!(
+        "\n6. The same loop on cloth. The scene ({CLOTH_SCENE_PATH}, bundled) is a {} × {} cloth,\n   \
+         {} m wide, hanging from clips on every other vertex of its top row, which swing {} m\n   \
+         back and forth at {} Hz. The recording ({CLOTH_CSV_PATH}) holds {} markers\n   \
+         (every third vertex) over {} s at {} Hz with {} mm of noise; it hides a physical effect\n   \
+         the scene lacks.\n\n   \
+         Where the scene fails (a marker fails where a coordinate leaves its band):\n\n",
+        scene.cloth.nx,
+        scene.cloth.nz,
+        num(width),
+        num(SWING_AMPLITUDE),
+        num(SWING_FREQUENCY),
+        loaded.markers.n_markers(),
+        num(loaded.rec.duration()),
+        num((loaded.rec.len() - 1) as f64 / loaded.rec.duration()),
+        num(RecordingOptions::default().noise * 1e3),
+    );
+    let (before, cloth_before) = loaded.compare(&loaded.model)?;
+    out.push_str(&indent(&cloth_comparison_text(&cloth_before, 5)));
+    super::print(&out)?;
+    out.clear();
+
+    let ex = run_explain_model(&loaded.model, &loaded.rec, &loaded.noise, false)?;
+    out.push_str(&format!(
+        "\n   What is missing: {} candidate effects fitted to the markers and ranked by evidence:\n\n",
+        ex.ranked.len()
+    ));
+    out.push_str(&indent(&cloth_explanation_text(&ex, TOP)));
+    let effects: Vec<Effect> = ex.effects();
+    let after = with_effects(&loaded, &effects)?;
+    match &after {
+        None => {
+            out.push_str("\n   Nothing to add: the scene already leaves only what noise leaves.\n")
+        }
+        Some((_, cloth_after)) => {
+            out.push_str("\n   With the effect added to the scene:\n");
+            for r in &ex.chosen {
+                out.push_str(&format!("   added: {}\n", super::fix::effect_line(r)));
+            }
+            out.push_str("   error before → after:\n");
+            out.push_str(&indent(&cloth_before_after_text(
+                &cloth_before,
+                cloth_after,
+            )));
+            out.push_str(&cloth_truth_text(&case.hidden, &ex.chosen));
+        }
+    }
+    let page = write_cloth_report(
+        dir,
+        &loaded,
+        ClothReport {
+            before: (&before, &cloth_before),
+            explanation: Some(&ex),
+            after: after.as_ref().map(|(c, cc)| (effects.as_slice(), c, cc)),
+            data: "cloth_hidden_effect.csv",
+            verdict: None,
+        },
+    )?;
+    out.push_str("\n   The cloth report: the per-vertex error map and the error over time in the page; the\n   \
+         mesh coloured by error (topics /cloth_error, /cloth_error_after, /tf) in the MCAP for\n   \
+         Foxglove's 3D panel:\n   ");
+    out.push_str(&report_line(&page));
+    out.push_str(&format!(
+        "   On your own markers: `modelgap explain --model {CLOTH_SCENE_PATH} --data your.csv`, then\n   \
+         `modelgap fix --model {CLOTH_SCENE_PATH} --data your.csv --out fixed.toml`.\n"
+    ));
+    super::print(&out)
+}
+
+/// The cloth truth beside what was found.
+fn cloth_truth_text(hidden: &[ClothHidden], chosen: &[RankedCandidate]) -> String {
+    let mut s = String::new();
+    for h in hidden {
+        let Some(found) = chosen
+            .iter()
+            .find(|c| c.candidate.id == h.id || c.equivalent.contains(&h.id))
+        else {
+            s.push_str(&format!(
+                "   The recording was made with {} = {:?} hidden in it: explain did not choose it.\n",
+                h.id, h.values
+            ));
+            continue;
+        };
+        for (p, truth) in found.params.iter().zip(&h.values) {
+            let uncertainty = if p.std_error.is_finite() {
+                format!(" ± {}", num(p.std_error))
+            } else {
+                String::new()
+            };
+            s.push_str(&format!(
+                "   The truth hidden in the recording (examples/make_cloth_demo_data.rs): {} = {} {};\n   \
+                 explain, not told it, found {}{uncertainty} {}.\n",
+                p.name,
+                num(*truth),
+                p.unit,
+                num(p.value),
+                p.unit
+            ));
+        }
+    }
+    s
 }
 
 /// The hidden truth beside what was found, for the candidates that were hidden.
@@ -258,6 +454,35 @@ mod tests {
                 .fold(0.0, f64::max);
             // Six significant digits: a relative difference of at most 5e-6.
             assert!(worst <= 5e-6, "{name}: {worst}");
+        }
+    }
+
+    /// The bundled cloth files are the scene and the recording of [`cloth_demo_case`] with
+    /// the default options, positions rounded to 6 decimals
+    /// (`examples/make_cloth_demo_data.rs`): so the truth the demo prints is in the file.
+    #[test]
+    fn bundled_cloth_files_are_the_cloth_demo_case() {
+        let case = cloth_demo_case().unwrap();
+        let scene = Scene::from_toml(CLOTH_SCENE, CLOTH_SCENE_PATH).unwrap();
+        assert_eq!(scene.to_toml().unwrap(), case.scene.to_toml().unwrap());
+        let bundled = cloth_demo_loaded().unwrap().rec;
+        let fresh = modelgap::cloth::hidden::record(
+            &case,
+            &modelgap::cloth::hidden::RecordingOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(bundled.t(), fresh.t());
+        assert_eq!(bundled.names(), fresh.names());
+        for name in fresh.names() {
+            let a = bundled.values(name).unwrap();
+            let b = fresh.values(name).unwrap();
+            let worst = a
+                .iter()
+                .zip(b)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
+            // Six decimals of a metre: at most 0.5 µm off.
+            assert!(worst <= 5e-7 + 1e-12, "{name}: {worst}");
         }
     }
 }

@@ -38,6 +38,9 @@ pub struct ExplainArgs {
 /// Model and recording errors (see [`super::report::load_loop`]), a model that cannot
 /// simulate the recording, a report that cannot be written.
 pub fn run(args: &ExplainArgs) -> anyhow::Result<()> {
+    if let Some(scene) = super::cloth_loop::scene_file(&args.common) {
+        return super::cloth_loop::explain_command(args, &scene);
+    }
     let loaded = load_loop(&args.common)?;
     if !args.json {
         print_notes(&loaded.notes);

@@ -28,7 +28,8 @@ pub struct FixArgs {
     #[arg(long, value_name = "N|ID")]
     pub effect: Option<String>,
 
-    /// Write the model with the effect(s) here (a bond-graph .toml); never the input model
+    /// Write the model with the effect(s) here (a bond-graph .toml, or a cloth scene .toml
+    /// with the new term); never the input model
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
 
@@ -39,7 +40,7 @@ pub struct FixArgs {
 
 /// Which candidate `--effect` names.
 #[derive(Clone, Debug, PartialEq, Eq)]
-enum Pick {
+pub(super) enum Pick {
     /// A rank, from 1.
     Rank(usize),
     /// A candidate id.
@@ -47,7 +48,7 @@ enum Pick {
 }
 
 impl Pick {
-    fn parse(text: &str) -> Pick {
+    pub(super) fn parse(text: &str) -> Pick {
         match text.trim().parse::<usize>() {
             Ok(n) => Pick::Rank(n),
             Err(_) => Pick::Id(text.trim().to_owned()),
@@ -63,6 +64,9 @@ impl Pick {
 /// `--out` that is the input model; a model that cannot simulate the recording or take the
 /// effect; a file that cannot be written.
 pub fn run(args: &FixArgs) -> anyhow::Result<()> {
+    if let Some(scene) = super::cloth_loop::scene_file(&args.common) {
+        return super::cloth_loop::fix_command(args, &scene);
+    }
     let loaded = load_loop(&args.common)?;
     check_out(&args.out, loaded.model_file.as_deref())?;
     let candidates = loaded.model.candidates();
@@ -198,7 +202,10 @@ pub fn run(args: &FixArgs) -> anyhow::Result<()> {
 /// # Errors
 ///
 /// [`BadInput`] when the rank or id is not in the ranking.
-fn picked<'a>(ex: &'a Explanation, pick: &Pick) -> anyhow::Result<(usize, &'a RankedCandidate)> {
+pub(super) fn picked<'a>(
+    ex: &'a Explanation,
+    pick: &Pick,
+) -> anyhow::Result<(usize, &'a RankedCandidate)> {
     let found = match pick {
         Pick::Rank(n) => n
             .checked_sub(1)
@@ -252,7 +259,7 @@ pub fn effect_line(r: &RankedCandidate) -> String {
 /// # Errors
 ///
 /// [`BadInput`] naming the path.
-fn check_out(out: &Path, model_file: Option<&Path>) -> anyhow::Result<()> {
+pub(super) fn check_out(out: &Path, model_file: Option<&Path>) -> anyhow::Result<()> {
     if out.is_dir() {
         return Err(BadInput(format!(
             "--out {} is a directory: give the new model file's name",

@@ -11,6 +11,7 @@ mod arr;
 mod bench;
 mod causality;
 mod cloth;
+mod cloth_loop;
 mod compare;
 mod demo;
 mod diagnose;
@@ -28,6 +29,7 @@ mod table7;
 use std::io::Write as _;
 
 use clap::{Parser, Subcommand};
+use modelgap::cloth::ClothError;
 use modelgap::{BondError, CoreError};
 
 /// Hold physical models against measurements: see where a model fails, learn which physical
@@ -127,8 +129,21 @@ pub fn exit_code(err: &anyhow::Error) -> u8 {
         if let Some(e) = cause.downcast_ref::<CoreError>() {
             return core_exit_code(e);
         }
+        if let Some(e) = cause.downcast_ref::<ClothError>() {
+            return cloth_exit_code(e);
+        }
     }
     EXIT_FAILURE
+}
+
+fn cloth_exit_code(e: &ClothError) -> u8 {
+    match e {
+        ClothError::Core(core) => core_exit_code(core),
+        // A simulation that blew up is a failure; scene and marker files are fixed by
+        // changing the input.
+        ClothError::NonFinite { .. } => EXIT_FAILURE,
+        _ => EXIT_BAD_INPUT,
+    }
 }
 
 fn bond_exit_code(e: &BondError) -> u8 {

@@ -316,10 +316,25 @@ pub fn print_notes(notes: &[String]) {
 ///
 /// Explain's errors (the model cannot simulate the recording at all).
 pub fn run_explain(loaded: &Loaded, quiet: bool) -> anyhow::Result<Explanation> {
+    run_explain_model(&loaded.model, &loaded.rec, &loaded.noise, quiet)
+}
+
+/// Runs explain on any model (a bond graph or a cloth scene) and recording, with the noise
+/// floors the user gave, behind the progress bar of [`run_explain`].
+///
+/// # Errors
+///
+/// Explain's errors (the model cannot simulate the recording at all).
+pub fn run_explain_model(
+    model: &dyn Model,
+    rec: &Recording,
+    noise: &BTreeMap<String, f64>,
+    quiet: bool,
+) -> anyhow::Result<Explanation> {
     let bar = if quiet || !std::io::stderr().is_terminal() {
         ProgressBar::hidden()
     } else {
-        let total = loaded.model.candidates().len() as u64;
+        let total = model.candidates().len() as u64;
         let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
         if let Ok(style) =
             ProgressStyle::with_template("{spinner} fitting candidate effects {pos}/{len} {msg}")
@@ -331,7 +346,7 @@ pub fn run_explain(loaded: &Loaded, quiet: bool) -> anyhow::Result<Explanation> 
     };
     let progress_bar = bar.clone();
     let opts = ExplainOptions {
-        noise: loaded.noise.clone(),
+        noise: noise.clone(),
         progress: Some(Arc::new(move |done, total| {
             progress_bar.set_length(total as u64);
             progress_bar.set_position(done as u64);
@@ -355,14 +370,9 @@ pub fn run_explain(loaded: &Loaded, quiet: bool) -> anyhow::Result<Explanation> 
         cancel: Some(cancel),
         ..opts
     };
-    let result = explain(&loaded.model, &loaded.rec, &opts);
+    let result = explain(model, rec, &opts);
     bar.finish_and_clear();
-    result.with_context(|| {
-        format!(
-            "explaining the recording with model {}",
-            loaded.model.name()
-        )
-    })
+    result.with_context(|| format!("explaining the recording with model {}", model.name()))
 }
 
 /// Compares a model (the loaded one, or one with effects built in) with the recording.

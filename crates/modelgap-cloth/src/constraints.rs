@@ -1,4 +1,12 @@
-//! Distance constraints as columns: particle pairs and rest lengths.
+//! Distance constraints as columns: particle pairs, rest lengths and compliances.
+//!
+//! A constraint is inextensible by default (`compliance` 0). A compliant
+//! constraint (compliance `α`, m/N) stretches under its tension `λ` (N) to
+//! `|c_a − c_b| = rest + α λ`; with the impulse kept as `μ = h p = h² λ`
+//! (kg m, see [`crate::newton`]) its error over a step of size `h` is
+//! `|c_a − c_b| − rest − α μ / h²` (the XPBD form). The solvers drive this
+//! error, relative to the rest length, below the stretch tolerance; for an
+//! inextensible constraint it is the relative stretch.
 
 use nalgebra::Vector3;
 
@@ -12,6 +20,9 @@ pub struct DistanceConstraints {
     pub b: Vec<u32>,
     /// Rest length of each constraint (m), positive.
     pub rest_length: Vec<f64>,
+    /// Compliance of each constraint (m/N, ≥ 0): stretch per unit tension;
+    /// 0 for an inextensible constraint.
+    pub compliance: Vec<f64>,
 }
 
 impl DistanceConstraints {
@@ -38,6 +49,38 @@ impl DistanceConstraints {
         self.a.push(a);
         self.b.push(b);
         self.rest_length.push(rest_length);
+        self.compliance.push(0.0);
+    }
+
+    /// The error of constraint `i` relative to its rest length:
+    /// `(|c_a − c_b| − rest − α μ/h²) / rest`, with `mu` its impulse × step
+    /// (kg m) and `inv_h2 = 1/h²`; the relative stretch when inextensible.
+    #[must_use]
+    pub fn error(&self, i: usize, positions: &[Vector3<f64>], mu: f64, inv_h2: f64) -> f64 {
+        let d = positions[self.a[i] as usize] - positions[self.b[i] as usize];
+        let rest = self.rest_length[i];
+        (d.norm() - rest - self.compliance[i] * mu * inv_h2) / rest
+    }
+
+    /// The largest `|error|` ([`error`](Self::error)) over all constraints;
+    /// NaN if any is NaN; 0 when there are none.
+    #[must_use]
+    pub fn max_error(&self, positions: &[Vector3<f64>], mu: &[f64], inv_h2: f64) -> f64 {
+        let mut worst = 0.0_f64;
+        for i in 0..self.len() {
+            let e = self.error(i, positions, mu[i], inv_h2).abs();
+            if e.is_nan() {
+                return f64::NAN;
+            }
+            worst = worst.max(e);
+        }
+        worst
+    }
+
+    /// Whether any constraint is compliant.
+    #[must_use]
+    pub fn any_compliant(&self) -> bool {
+        self.compliance.iter().any(|&a| a > 0.0)
     }
 
     /// The relative stretch `(|c_a − c_b| − rest) / rest` of constraint `i`

@@ -179,6 +179,18 @@ pub enum ClothError {
         /// The vertex (index in its mesh).
         vertex: usize,
     },
+    /// A collider cannot be built: a field is out of range or its mesh is malformed.
+    #[error("{shape} collider: `{field}` must be {expected}, found {found}")]
+    BadCollider {
+        /// The shape: `plane`, `ball`, `cuboid`, `capsule` or `trimesh`.
+        shape: &'static str,
+        /// The field, with an index for a mesh's vertex or triangle (`triangles[3]`).
+        field: String,
+        /// What it must be.
+        expected: String,
+        /// What was given.
+        found: String,
+    },
     /// An error of modelgap-core: MCAP files, their topics, their time.
     #[error(transparent)]
     Core(#[from] CoreError),

@@ -29,20 +29,26 @@
 //! Modules: [`particles`] ([`ParticleSet`]), [`constraints`]
 //! ([`DistanceConstraints`]), [`mesh`] ([`GridCloth`], OBJ meshes, the
 //! vertex numbering), [`solver`] ([`SolverParams`], [`StepReport`], the
-//! Gauss–Seidel sweep), [`newton`] (the global solve), [`contact`]
+//! Gauss–Seidel sweep), [`colouring`] (constraint colours, the coloured
+//! parallel sweep), [`newton`] (the global solve), [`contact`]
 //! ([`Collider`]), [`world`] ([`ClothWorld`]), [`kinematic`] ([`PinPath`]:
 //! pins that follow a path), [`markers`] ([`MarkerRecording`], marker CSV and
 //! MCAP files), [`scenes`] (the reference scenes), [`trajectory`] (running a
 //! scene, its recorded frames and Foxglove MCAP), [`error`].
 
+pub mod colouring;
 pub mod constraints;
 pub mod contact;
 pub mod error;
+pub mod forces;
+pub mod hidden;
 pub mod kinematic;
 pub mod markers;
 pub mod mesh;
+pub mod model;
 pub mod newton;
 pub mod particles;
+pub mod report;
 pub mod scenes;
 pub mod solver;
 pub mod trajectory;
@@ -51,8 +57,10 @@ pub mod world;
 pub use constraints::DistanceConstraints;
 pub use contact::{Collider, ColliderId, Shape};
 pub use error::{ClothError, Result};
+pub use forces::{ClothEffects, ClothForces, PointMass};
 pub use kinematic::{KinematicPin, PinPath};
 pub use markers::MarkerRecording;
+pub use model::{ClothModel, PredictSettings};
 pub use mesh::{BuildMesh, ClothMesh, GridCloth, GridEdges};
 pub use particles::{ParticleId, ParticleSet};
 pub use scenes::Scene;

@@ -72,15 +72,21 @@
 //!
 //! # Contacts
 //!
-//! Before each evaluation, every particle whose *impulse-consistent* position
-//! `y = x̃ − (Jᵀμ)/m` lies inside a collider (or which was in contact) is
-//! projected out with Coulomb friction exactly as in [`crate::contact`]
-//! (tangential motion over the step limited by friction × depth); the
-//! projection defines its contact impulse `r = m (z − y)` and its position
-//! `x = z`, so `F` stays zero there and contacts release (`r = 0`) when `y`
-//! leaves the collider. In the matrix, a particle in contact gets a stiff
-//! spring `κ = CONTACT_STIFFNESS · m` along the normal (in all directions when
-//! friction holds it), so Newton's step sees it as held by the surface.
+//! Contacts form an active set. A particle found inside a collider joins it;
+//! an active particle is projected onto its collider's surface at every
+//! evaluation, and its contact impulse `r` is the normal part of what it
+//! needs (`r·n` of `M(x − x̃) + Jᵀμ`) plus Coulomb friction opposing its
+//! tangential motion over the step, regularised below
+//! [`FRICTION_SLIP`]: there friction is a stiff tangential spring, so a
+//! particle sticks while the cone holds it (creeping by at most
+//! `FRICTION_SLIP` per step) and slides with `friction × r·n` when it does
+//! not. Between iterations a particle whose normal impulse would pull it
+//! into the surface leaves the set. In the matrix an active particle gets a
+//! stiff spring `κ = CONTACT_STIFFNESS · m` along the normal and friction's
+//! tangential stiffness, so Newton's step sees it as held by the surface.
+//! (Holding sticking particles at fixed anchors was tried first: anchors of
+//! neighbours need not be a rest length apart, and the impulses between
+//! them grew without bound.)
 //!
 //! # Convergence
 //!
@@ -89,14 +95,17 @@
 //! tolerance (the Gauss–Seidel criterion). The momentum residual `|F_i|/m_i`
 //! is driven down by the merit but not required to vanish.
 //!
-//! # Status
+//! # Measured
 //!
-//! Holds the tolerance on `two-corners` at every step (the Gauss–Newton
-//! solve could not), but is slow: a factorisation of the 4434 × 4434 KKT
-//! matrix costs about 3 ms, and on `corner` some steps stall (a fresh-factor
-//! step fails the line search with a large momentum residual, likely where
-//! compressed links make the clamped matrix inexact) and fall back to
-//! Gauss–Seidel sweeps.
+//! With these choices (start from the free preview and last step's
+//! impulses; refactor when an iteration shrinks the merit by less than
+//! [`SolverParams::refactor_ratio`](crate::SolverParams::refactor_ratio)
+//! = 0.3; up to [`MAX_INCREASES`] non-monotone full steps), the 30 × 30
+//! reference scenes (3 s, h = 0.01) hold 1e-4 at every step: `corner`
+//! 3.1 iterations and 1.1 factorisations per step, `two-corners` 3.4 and
+//! 0.44, `drape` 2.2 and 2.0. A factorisation of the 4434 × 4434 KKT matrix
+//! costs about 3 ms and a solve 0.4 ms, so factorisations dominate; see
+//! `examples/scene_timing.rs` and `modelgap cloth bench`.
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
@@ -115,15 +124,32 @@ use crate::contact::{Collider, ContactState};
 use crate::solver::{self, SolverParams};
 
 /// Relative shift `−ε` on the (scaled) impulse diagonal of the KKT matrix
-/// (dimensionless). It changes each Newton step by about this fraction, far
-/// below the stretch tolerance, and keeps pivots of dependent constraints (a
-/// straight row between two pins) away from zero.
-pub const REGULARISATION: f64 = 1e-10;
+/// (dimensionless): a proximal term on the impulses. It changes only Newton's
+/// step, not the solution it converges to, and bounds the impulse of a
+/// nearly dependent constraint (a straight row between two pins, whose
+/// tension the linearisation cannot see): with 1e-10 such a row took huge
+/// impulse steps that the next direction change turned into momentum
+/// errors; 1e-6 cut `two-corners` from 15 to 4 iterations per step.
+pub const REGULARISATION: f64 = 1e-6;
+
+/// Full Newton steps (fresh factor) that may raise the merit in one step:
+/// the merit mixes stretch and momentum residual, and a good step often
+/// trades a large fall of one for a rise of the other (halving it instead
+/// tripled the iterations on `corner`).
+pub const MAX_INCREASES: usize = 10;
+
+/// A full step may raise the merit at most this many times (dimensionless).
+pub const WATCHDOG: f64 = 100.0;
 
 /// Contact stiffness in the Newton matrix, per unit particle mass
 /// (dimensionless): a particle in contact is treated as held by a spring
 /// this many times its mass, so a step barely moves it into the surface.
 pub const CONTACT_STIFFNESS: f64 = 1e6;
+
+/// Tangential motion over a step (m) below which friction acts as a stiff
+/// spring rather than a constant force: the regularisation of Coulomb's
+/// law that lets a particle stick (it creeps by at most this much per step).
+pub const FRICTION_SLIP: f64 = 1e-6;
 
 /// Halvings of a Newton step tried before the iteration gives up on it.
 pub const MAX_HALVINGS: usize = 8;
@@ -161,6 +187,8 @@ pub(crate) struct StepInput<'a> {
     pub(crate) free: &'a [Vector3<f64>],
     pub(crate) colliders: &'a [Collider],
     pub(crate) params: &'a SolverParams,
+    /// `1/h²` (1/s²): compliant constraints' error is `len − rest − α μ/h²`.
+    pub(crate) inv_h2: f64,
 }
 
 /// An iterate and everything evaluated at it.
@@ -170,7 +198,7 @@ struct State {
     mu: Vec<f64>,
     /// Contact impulses (kg m).
     r: Vec<Vector3<f64>>,
-    /// Contact normal of each particle; `stick` when friction holds it.
+    /// Contact of each particle (the active set).
     contact: Vec<Contact>,
     /// `Σ_c ±μ_c n_c` per particle (kg m).
     g: Vec<Vector3<f64>>,
@@ -190,8 +218,11 @@ struct State {
 struct Contact {
     normal: Vector3<f64>,
     friction: f64,
+    collider: u32,
     active: bool,
-    stick: bool,
+    /// `friction × normal impulse / tangential motion` (kg): friction's
+    /// tangential stiffness at the last evaluation.
+    tangential_stiffness: f64,
 }
 
 /// The KKT system of one topology: ordering, symbolic and numeric factors,
@@ -541,6 +572,7 @@ impl NewtonSolver {
         self.cur.contact.fill(Contact::default());
         evaluate(&mut self.cur, input, self.mean_rest);
         let mut need_refactor = false;
+        let mut increases_left = MAX_INCREASES;
         loop {
             out.max_stretch = self.cur.max_stretch;
             if self.cur.max_stretch <= tol && self.cur.penetration <= params.contact_tolerance {
@@ -560,7 +592,8 @@ impl NewtonSolver {
                         break;
                     }
                 }
-                if self.newton_step(input) {
+                let allow_increase = fresh && increases_left > 0;
+                if self.newton_step(input, fresh, allow_increase) {
                     accepted = true;
                     break;
                 }
@@ -569,6 +602,22 @@ impl NewtonSolver {
                 }
             }
             need_refactor = false;
+            if accepted && update_contacts(&mut self.trial, input) {
+                evaluate(&mut self.trial, input, self.mean_rest);
+                std::mem::swap(&mut self.cur, &mut self.trial);
+                need_refactor = false;
+                continue;
+            }
+            if accepted && self.trial.merit >= self.cur.merit {
+                // A full Newton step that raised the merit (allowed a few
+                // times per step: the merit mixes stretch and momentum, and
+                // a good step can trade one for the other): keep the factor
+                // fresh until the merit falls again.
+                increases_left -= 1;
+                std::mem::swap(&mut self.cur, &mut self.trial);
+                need_refactor = true;
+                continue;
+            }
             if accepted {
                 let ratio = (self.trial.merit / self.cur.merit).sqrt();
                 if ratio > params.refactor_ratio {
@@ -585,6 +634,7 @@ impl NewtonSolver {
                     input.inv_mass,
                     &mut self.cur.x,
                     &mut self.cur.mu,
+                    input.inv_h2,
                 );
                 evaluate(&mut self.cur, input, self.mean_rest);
             }
@@ -603,7 +653,7 @@ impl NewtonSolver {
 
     /// Solves with the current factor at `cur` and line-searches into
     /// `trial`; returns whether a step decreased the merit.
-    fn newton_step(&mut self, input: &StepInput<'_>) -> bool {
+    fn newton_step(&mut self, input: &StepInput<'_>, fresh: bool, allow_increase: bool) -> bool {
         let cur = &self.cur;
         for (p, &d) in self.dof.iter().enumerate() {
             if d == NONE {
@@ -648,6 +698,14 @@ impl NewtonSolver {
             if trial.merit < (1.0 - 1e-4 * alpha) * cur.merit {
                 return true;
             }
+            if alpha == 1.0 && allow_increase && trial.merit.is_finite() && trial.merit < WATCHDOG * cur.merit {
+                return true;
+            }
+            if !fresh {
+                // A stale factor's step that does not decrease the merit:
+                // refactor rather than shorten it.
+                return false;
+            }
             alpha *= 0.5;
         }
         false
@@ -679,11 +737,8 @@ impl NewtonSolver {
             let ct = &cur.contact[p];
             if ct.active {
                 let kappa = CONTACT_STIFFNESS * m;
-                block += if ct.stick {
-                    Matrix3::identity() * kappa
-                } else {
-                    ct.normal * ct.normal.transpose() * kappa
-                };
+                let nn = ct.normal * ct.normal.transpose();
+                block += nn * kappa + (Matrix3::identity() - nn) * ct.tangential_stiffness;
             }
             add(&mut self.values, &self.diag_slots[p], &block, true);
         }
@@ -714,7 +769,9 @@ impl NewtonSolver {
                     self.values[self.jac_slots[c][3 + i] as usize] = -s * n[i];
                 }
             }
-            self.values[self.mu_diag_slot[c] as usize] = -REGULARISATION * s;
+            let alpha = cs.compliance[c] * input.inv_h2;
+            let reg = REGULARISATION;
+            self.values[self.mu_diag_slot[c] as usize] = -reg * s - alpha * s * s;
         }
         let pattern = SymbolicSparseColMatRef::new_checked(
             self.dim,
@@ -742,6 +799,26 @@ impl NewtonSolver {
     }
 }
 
+/// Between iterations: releases contacts whose impulse pulls the particle
+/// into the surface, and lets slide those whose tangential impulse leaves the
+/// friction cone. Returns whether the set changed.
+fn update_contacts(s: &mut State, input: &StepInput<'_>) -> bool {
+    let mut changed = false;
+    for i in 0..s.x.len() {
+        let ct = &mut s.contact[i];
+        if !ct.active {
+            continue;
+        }
+        if s.r[i].dot(&ct.normal) < 0.0 {
+            // Released: it leaves the surface (outward, so no penetration).
+            ct.active = false;
+            changed = true;
+        }
+    }
+    let _ = input;
+    changed
+}
+
 /// Contact update, then constraint and momentum residuals and the merit.
 fn evaluate(s: &mut State, input: &StepInput<'_>, mean_rest: f64) {
     let cs = input.constraints;
@@ -759,65 +836,66 @@ fn evaluate(s: &mut State, input: &StepInput<'_>, mean_rest: f64) {
         s.g[a] += p;
         s.g[b] -= p;
     }
-    // Contacts: project the impulse-consistent position.
+    // Contacts (an active set): an active particle is held on its
+    // collider's surface (at its anchor while friction sticks it), and its
+    // contact impulse `r` is whatever the held directions need; a particle
+    // found inside a collider joins the set here, and
+    // [`update_contacts`] releases or lets slide the others between
+    // iterations.
     if !input.colliders.is_empty() {
+        let mut moved = false;
         #[allow(clippy::needless_range_loop)] // columns indexed together
         for i in 0..s.x.len() {
             if k[i] == 0.0 {
                 continue;
             }
-            let m = 1.0 / k[i];
-            let y = input.free[i] - s.g[i] * k[i];
-            let mut z = y;
-            let mut contact = Contact::default();
-            for col in input.colliders {
-                let (phi, n) = col.signed_distance(&z);
-                if phi >= 0.0 {
-                    continue;
+            let ct = &mut s.contact[i];
+            if !ct.active {
+                for (ci, col) in input.colliders.iter().enumerate() {
+                    let (phi, n) = col.signed_distance(&s.x[i]);
+                    if phi < 0.0 {
+                        *ct = Contact {
+                            normal: n,
+                            friction: col.friction,
+                            collider: ci as u32,
+                            active: true,
+                            ..Contact::default()
+                        };
+                        break;
+                    }
                 }
-                z -= phi * n;
-                let motion = z - input.start[i];
-                let tangential = motion - motion.dot(&n) * n;
-                let t_len = tangential.norm();
-                let allowed = col.friction * (-phi);
-                let stick = t_len <= allowed;
-                if stick {
-                    z -= tangential;
-                } else if t_len > 0.0 {
-                    z -= tangential * (allowed / t_len);
-                }
-                contact = Contact {
-                    normal: n,
-                    friction: col.friction,
-                    active: true,
-                    stick: stick && col.friction > 0.0,
-                };
             }
-            if contact.active || s.contact[i].active {
-                s.r[i] = m * (z - y);
-                s.x[i] = z;
-                s.contact[i] = contact;
+            if ct.active {
+                let col = &input.colliders[ct.collider as usize];
+                let (phi, n) = col.signed_distance(&s.x[i]);
+                ct.normal = n;
+                if phi != 0.0 {
+                    s.x[i] -= phi * n;
+                    moved = true;
+                }
             }
         }
-        // Positions moved: refresh the directions and impulse sums.
-        s.g.fill(Vector3::zeros());
-        for c in 0..cs.len() {
-            let (a, b) = (cs.a[c] as usize, cs.b[c] as usize);
-            let d = s.x[a] - s.x[b];
-            let len = d.norm();
-            if len > f64::MIN_POSITIVE {
-                s.normals[c] = d / len;
+        if moved {
+            // Positions moved: refresh the directions and impulse sums.
+            s.g.fill(Vector3::zeros());
+            for c in 0..cs.len() {
+                let (a, b) = (cs.a[c] as usize, cs.b[c] as usize);
+                let d = s.x[a] - s.x[b];
+                let len = d.norm();
+                if len > f64::MIN_POSITIVE {
+                    s.normals[c] = d / len;
+                }
+                s.lengths[c] = len;
+                let p = s.mu[c] * s.normals[c];
+                s.g[a] += p;
+                s.g[b] -= p;
             }
-            s.lengths[c] = len;
-            let p = s.mu[c] * s.normals[c];
-            s.g[a] += p;
-            s.g[b] -= p;
         }
     }
     let mut merit = 0.0;
     let mut max_stretch = 0.0_f64;
     for c in 0..cs.len() {
-        s.c[c] = s.lengths[c] - cs.rest_length[c];
+        s.c[c] = s.lengths[c] - cs.rest_length[c] - cs.compliance[c] * s.mu[c] * input.inv_h2;
         let rel = s.c[c] / cs.rest_length[c];
         merit += rel * rel;
         max_stretch = max_stretch.max(rel.abs());
@@ -833,13 +911,31 @@ fn evaluate(s: &mut State, input: &StepInput<'_>, mean_rest: f64) {
             s.f[i] = Vector3::zeros();
             continue;
         }
-        s.f[i] = (s.x[i] - input.free[i]) / k[i] + s.g[i] - s.r[i];
+        let f = (s.x[i] - input.free[i]) / k[i] + s.g[i];
+        let ct = &s.contact[i];
+        s.r[i] = if ct.active {
+            // The normal impulse holds it on the surface; Coulomb friction
+            // opposes its tangential motion over the step, regularised
+            // below FRICTION_SLIP (a stiff tangential spring: sticking).
+            let n = ct.normal;
+            let rn = f.dot(&n);
+            let motion = s.x[i] - input.start[i];
+            let tangential = motion - motion.dot(&n) * n;
+            let stiffness = ct.friction * rn.max(0.0) / tangential.norm().max(FRICTION_SLIP);
+            s.contact[i].tangential_stiffness = stiffness;
+            rn * n - tangential * stiffness
+        } else {
+            Vector3::zeros()
+        };
+        s.f[i] = f - s.r[i];
         let e = s.f[i].norm() * k[i];
         max_residual = max_residual.max(e);
         let rel = e / mean_rest;
         merit += rel * rel;
-        for col in input.colliders {
-            penetration = penetration.max(-col.signed_distance(&s.x[i]).0);
+        if !s.contact[i].active {
+            for col in input.colliders {
+                penetration = penetration.max(-col.signed_distance(&s.x[i]).0);
+            }
         }
     }
     s.merit = if max_stretch.is_nan() {
@@ -876,6 +972,7 @@ mod tests {
             free: &free,
             colliders: &[],
             params: &params,
+            inv_h2: 1.0,
         };
         let mut solver = NewtonSolver::new(&c, &k).unwrap();
         let mut x = free.clone();
@@ -892,3 +989,4 @@ mod tests {
         assert!(mu.iter().all(|&m| m > 0.0), "{mu:?}");
     }
 }
+

@@ -24,15 +24,56 @@
 //! size = 1.0                # m, the grid spans size x size * (nz - 1) / (nx - 1)
 //! particle_mass = 0.001     # kg
 //! origin = [0.0, 0.0, 0.0]  # m, position of vertex 0
+//! rotation = [0.0, 0.0, 0.0] # optional, rad: axis x angle turning the grid's x-z plane
+//!                           # (about vertex 0); [1.5708, 0, 0] hangs rows along -y
 //! pins = [0]                # vertex indices row * nx + col
 //! shear = false             # optional
 //! bend = false              # optional
+//! compliance = 0.0          # optional, m/N per constraint (0: inextensible)
+//! bend_stiffness = 0.0      # optional, N/m, springs on the bend pairs (crate::forces)
+//! damping = 0.0             # optional, 1/s, velocity damping -c m v
 //!
-//! [[colliders]]             # optional, any number
-//! shape = "ball"            # or "plane" with point = [..] and normal = [..]
-//! center = [0.5, 0.0, 0.5]
-//! radius = 0.3
-//! friction = 0.3
+//! [air]                     # optional: aerodynamic drag per triangle (crate::forces)
+//! density = 1.225           # kg/m^3, optional
+//! drag_coefficient = 1.0    # dimensionless
+//! wind = [0.0, 0.0, 0.0]    # m/s, optional
+//!
+//! [[point_masses]]          # optional, any number: extra mass at a vertex
+//! vertex = 899
+//! mass = 0.01               # kg
+//!
+//! [[colliders]]             # optional, any number; each has a shape and its fields
+//! shape = "ball"            # a solid ball
+//! center = [0.5, 0.0, 0.5]  # m
+//! radius = 0.3              # m
+//! friction = 0.3            # optional, Coulomb coefficient (default 0)
+//!
+//! [[colliders]]
+//! shape = "plane"           # the half-space behind a plane
+//! point = [0.0, -1.0, 0.0]  # m
+//! normal = [0.0, 1.0, 0.0]  # outward, normalised when read
+//!
+//! [[colliders]]
+//! shape = "cuboid"          # a solid box
+//! center = [0.5, -0.2, 0.5] # m
+//! half_extents = [0.3, 0.05, 0.3]  # m, along the box's axes
+//! rotation = [0.0, 0.0, 0.0]       # optional, rad: rotation axis * angle
+//!
+//! [[colliders]]
+//! shape = "capsule"         # the points within radius of the segment a-b
+//! a = [0.0, -0.2, 0.5]      # m
+//! b = [1.0, -0.2, 0.5]      # m
+//! radius = 0.05             # m
+//!
+//! [[colliders]]
+//! shape = "trimesh"         # triangles counter-clockwise seen from outside
+//! vertices = [[0.0, -0.5, 0.0], [1.0, -0.5, 0.0], [1.0, -0.5, 1.0], [0.0, -0.5, 1.0]]  # m
+//! triangles = [[0, 2, 1], [0, 3, 2]]   # vertex indices
+//! # obj = "table.obj"       # or: an OBJ file (relative to the scene file) instead
+//! translation = [0.0, 0.0, 0.0]        # optional, m
+//! rotation = [0.0, 0.0, 0.0]           # optional, rad: rotation axis * angle
+//! shell_thickness = 0.01    # optional, m: an open mesh is a surface; a point up to
+//!                           # this far behind it penetrates (a closed mesh is a solid)
 //!
 //! [pins]                    # optional: pins that move (kinematic pins)
 //! from_markers = false      # pinned vertices whose ids appear in a marker
@@ -49,8 +90,9 @@ use std::path::{Path, PathBuf};
 use nalgebra::{Isometry3, Vector3};
 use serde::Deserialize;
 
-use crate::contact::Collider;
+use crate::contact::{Collider, Shape};
 use crate::error::{ClothError, Result};
+use crate::forces::{AIR_DENSITY, ClothEffects, ClothForces, PointMass};
 use crate::kinematic::{PinPath, follow_markers};
 use crate::markers::{MarkerRecording, read_markers_path};
 use crate::mesh::GridCloth;
@@ -87,6 +129,9 @@ pub struct Scene {
     /// The marker recording of `pins_from_markers` (`.csv` or `.mcap`); a relative path in
     /// a scene file is resolved against the file's folder by [`from_path`](Self::from_path).
     pub pin_markers: Option<PathBuf>,
+    /// Physical terms beyond gravity: drag, wind, damping, bending, compliance, point
+    /// masses (see [`crate::forces`]); none by default.
+    pub effects: ClothEffects,
 }
 
 #[derive(Deserialize)]
@@ -104,6 +149,18 @@ struct SceneFile {
     colliders: Vec<ColliderFile>,
     #[serde(default)]
     pins: PinsFile,
+    air: Option<AirFile>,
+    #[serde(default)]
+    point_masses: Vec<PointMass>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AirFile {
+    density: Option<f64>,
+    drag_coefficient: f64,
+    #[serde(default)]
+    wind: [f64; 3],
 }
 
 #[derive(Default, Deserialize)]
@@ -133,11 +190,19 @@ struct ClothFile {
     #[serde(default)]
     origin: [f64; 3],
     #[serde(default)]
+    rotation: [f64; 3],
+    #[serde(default)]
     pins: Vec<u32>,
     #[serde(default)]
     shear: bool,
     #[serde(default)]
     bend: bool,
+    #[serde(default)]
+    compliance: f64,
+    #[serde(default)]
+    bend_stiffness: f64,
+    #[serde(default)]
+    damping: f64,
 }
 
 #[derive(Deserialize)]
@@ -155,6 +220,154 @@ enum ColliderFile {
         #[serde(default)]
         friction: f64,
     },
+    Cuboid {
+        center: [f64; 3],
+        half_extents: [f64; 3],
+        /// Rotation vector: axis times angle (rad).
+        #[serde(default)]
+        rotation: [f64; 3],
+        #[serde(default)]
+        friction: f64,
+    },
+    Capsule {
+        a: [f64; 3],
+        b: [f64; 3],
+        radius: f64,
+        #[serde(default)]
+        friction: f64,
+    },
+    TriMesh {
+        #[serde(default)]
+        vertices: Vec<[f64; 3]>,
+        #[serde(default)]
+        triangles: Vec<[u32; 3]>,
+        /// An OBJ file instead of `vertices` and `triangles`.
+        obj: Option<PathBuf>,
+        #[serde(default)]
+        translation: [f64; 3],
+        /// Rotation vector: axis times angle (rad).
+        #[serde(default)]
+        rotation: [f64; 3],
+        shell_thickness: Option<f64>,
+        #[serde(default)]
+        friction: f64,
+    },
+}
+
+/// The mesh of an OBJ file (`path` relative to `dir` when given).
+fn read_obj_mesh(
+    path: &Path,
+    dir: Option<&Path>,
+) -> std::result::Result<crate::mesh::ClothMesh, String> {
+    let path = match dir {
+        Some(dir) if path.is_relative() => dir.join(path),
+        _ => path.to_path_buf(),
+    };
+    let file = std::fs::File::open(&path).map_err(|source| {
+        ClothError::Io {
+            source,
+            path: path.clone(),
+        }
+        .to_string()
+    })?;
+    crate::mesh::ClothMesh::from_obj(
+        std::io::BufReader::new(file),
+        crate::mesh::DEFAULT_PARTICLE_MASS,
+    )
+    .map_err(|e| format!("{e} in {}", path.display()))
+}
+
+/// The scene file's colliders (an `obj` file relative to `dir` when given); an error
+/// names the collider's index and field.
+fn colliders_from_file(
+    colliders: &[ColliderFile],
+    dir: Option<&Path>,
+) -> std::result::Result<Vec<Collider>, String> {
+    let pose = |translation: [f64; 3], rotation: [f64; 3]| {
+        Isometry3::new(Vector3::from(translation), Vector3::from(rotation))
+    };
+    let mut out = Vec::with_capacity(colliders.len());
+    for (k, c) in colliders.iter().enumerate() {
+        let built = match c {
+            ColliderFile::Ball {
+                center,
+                radius,
+                friction,
+            } => Ok(Collider::ball(Vector3::from(*center), *radius).friction(*friction)),
+            ColliderFile::Plane {
+                point,
+                normal,
+                friction,
+            } => {
+                let n = Vector3::from(*normal);
+                if n.iter().all(|c| c.is_finite()) && n.norm() > 0.0 {
+                    Ok(Collider::plane(Vector3::from(*point), n).friction(*friction))
+                } else {
+                    Err(ClothError::BadCollider {
+                        shape: "plane",
+                        field: "normal".into(),
+                        expected: "non-zero and finite".into(),
+                        found: format!("{normal:?}"),
+                    })
+                }
+            }
+            ColliderFile::Cuboid {
+                center,
+                half_extents,
+                rotation,
+                friction,
+            } => Collider::cuboid(Vector3::from(*half_extents), pose(*center, *rotation))
+                .map(|c| c.friction(*friction)),
+            ColliderFile::Capsule {
+                a,
+                b,
+                radius,
+                friction,
+            } => Collider::capsule(Vector3::from(*a), Vector3::from(*b), *radius)
+                .map(|c| c.friction(*friction)),
+            ColliderFile::TriMesh {
+                vertices,
+                triangles,
+                obj,
+                translation,
+                rotation,
+                shell_thickness,
+                friction,
+            } => {
+                let (vertices, triangles) = match obj {
+                    Some(_) if !vertices.is_empty() || !triangles.is_empty() => {
+                        return Err(format!(
+                            "colliders[{k}]: a trimesh takes either `obj` or `vertices` and \
+                             `triangles`, found both"
+                        ));
+                    }
+                    Some(path) => {
+                        let mesh =
+                            read_obj_mesh(path, dir).map_err(|e| format!("colliders[{k}]: {e}"))?;
+                        (mesh.positions, mesh.triangles)
+                    }
+                    None => (
+                        vertices.iter().map(|v| Vector3::from(*v)).collect(),
+                        triangles.clone(),
+                    ),
+                };
+                Collider::trimesh_with_shell(
+                    vertices,
+                    triangles,
+                    shell_thickness.unwrap_or(crate::contact::DEFAULT_SHELL_THICKNESS),
+                )
+            }
+            .map(|c| {
+                c.transformed(&pose(*translation, *rotation))
+                    .friction(*friction)
+            }),
+        };
+        let collider = built
+            .and_then(|c| c.check().map(|()| c))
+            .map_err(|e| format!("colliders[{k}]: {e}"))?;
+        out.push(collider);
+    }
+    Ok(out)
 }
 
 impl Scene {
@@ -162,8 +375,15 @@ impl Scene {
     ///
     /// # Errors
     /// [`ClothError::Scene`] for malformed TOML, unknown fields, or
-    /// non-positive `dt`, `duration`, `size` or tolerance.
+    /// non-positive `dt`, `duration`, `size` or tolerance, or a collider that cannot be
+    /// built (the message names it, `colliders[2]`, and its field).
     pub fn from_toml(text: &str, label: &str) -> Result<Self> {
+        Self::from_toml_in(text, label, None)
+    }
+
+    /// As [`from_toml`](Self::from_toml), with relative file names in the scene (a
+    /// trimesh collider's `obj`) resolved against `dir`.
+    fn from_toml_in(text: &str, label: &str, dir: Option<&Path>) -> Result<Self> {
         let bad = |message: String| ClothError::Scene {
             scene: label.to_string(),
             message,
@@ -203,7 +423,10 @@ impl Scene {
         let mut cloth = GridCloth::new(c.nx, c.nz, c.size / (c.nx - 1) as f64)
             .shear(c.shear)
             .bend(c.bend)
-            .world_from_local(Isometry3::translation(ox, oy, oz));
+            .world_from_local(Isometry3::new(
+                Vector3::new(ox, oy, oz),
+                Vector3::from(c.rotation),
+            ));
         if let Some(m) = c.particle_mass {
             cloth = cloth.particle_mass(m);
         }
@@ -224,23 +447,8 @@ impl Scene {
             cloth = cloth.pin(p.vertex);
             pin_paths.push((p.vertex, path));
         }
-        let colliders =
-            file.colliders
-                .iter()
-                .map(|c| match *c {
-                    ColliderFile::Ball {
-                        center,
-                        radius,
-                        friction,
-                    } => Collider::ball(Vector3::from(center), radius).friction(friction),
-                    ColliderFile::Plane {
-                        point,
-                        normal,
-                        friction,
-                    } => Collider::plane(Vector3::from(point), Vector3::from(normal))
-                        .friction(friction),
-                })
-                .collect();
+        let effects = effects_from_file(&file, n_vertices).map_err(bad)?;
+        let colliders = colliders_from_file(&file.colliders, dir).map_err(bad)?;
         Ok(Self {
             name: file.name,
             description: file.description,
@@ -252,6 +460,7 @@ impl Scene {
             pin_paths,
             pins_from_markers: file.pins.from_markers,
             pin_markers: file.pins.markers,
+            effects,
         })
     }
 
@@ -264,7 +473,7 @@ impl Scene {
             source,
             path: path.to_path_buf(),
         })?;
-        let mut scene = Self::from_toml(&text, &path.display().to_string())?;
+        let mut scene = Self::from_toml_in(&text, &path.display().to_string(), path.parent())?;
         if let Some(markers) = scene.pin_markers.take() {
             scene.pin_markers = Some(match path.parent() {
                 Some(dir) if markers.is_relative() => dir.join(markers),
@@ -305,6 +514,179 @@ impl Scene {
             *v = map(*v);
         }
         Ok(scene)
+    }
+
+    /// The scene as the text of a scene file (the format of the [module docs](self)),
+    /// which [`from_toml`](Self::from_toml) reads back to the same scene. Effect fields
+    /// appear only when set. The grid's placement is written as its `origin` (a scene file
+    /// holds no rotation); the solver's method and limits are not part of a scene file.
+    ///
+    /// # Errors
+    /// [`ClothError::Scene`] for a collider shape the scene format cannot hold.
+    pub fn to_toml(&self) -> Result<String> {
+        use std::fmt::Write as _;
+        let num = |v: f64| format!("{v:?}");
+        let vec3 = |v: &Vector3<f64>| format!("[{}, {}, {}]", num(v.x), num(v.y), num(v.z));
+        let text = |t: &str| serde_json::to_string(t).unwrap_or_else(|_| "\"\"".into());
+        let mut out = String::new();
+        let c = &self.cloth;
+        let path_vertices: Vec<u32> = self.pin_paths.iter().map(|(v, _)| *v).collect();
+        let mut pins: Vec<u32> = c
+            .pinned
+            .iter()
+            .copied()
+            .filter(|v| !path_vertices.contains(v))
+            .collect();
+        pins.sort_unstable();
+        pins.dedup();
+        let fx = &self.effects.forces;
+        // Writing to a String cannot fail.
+        let _ = writeln!(out, "name = {}", text(&self.name));
+        let _ = writeln!(out, "description = {}", text(&self.description));
+        let _ = writeln!(out, "duration = {}  # s", num(self.duration));
+        let _ = writeln!(out, "dt = {}  # s", num(self.dt));
+        let _ = writeln!(
+            out,
+            "stretch_tolerance = {}  # relative",
+            num(self.params.stretch_tolerance)
+        );
+        let _ = writeln!(out, "gravity = {}  # m/s^2", vec3(&self.params.gravity));
+        let _ = writeln!(out, "\n[cloth]");
+        let _ = writeln!(out, "nx = {}", c.nx);
+        let _ = writeln!(out, "nz = {}", c.nz);
+        let _ = writeln!(
+            out,
+            "size = {}  # m",
+            num(c.spacing * (c.nx.max(2) - 1) as f64)
+        );
+        let _ = writeln!(out, "particle_mass = {}  # kg", num(c.particle_mass));
+        let _ = writeln!(
+            out,
+            "origin = {}  # m",
+            vec3(&c.world_from_local.translation.vector)
+        );
+        let rotation = c.world_from_local.rotation.scaled_axis();
+        if rotation != Vector3::zeros() {
+            let _ = writeln!(out, "rotation = {}  # rad, axis x angle", vec3(&rotation));
+        }
+        let pins: Vec<String> = pins.iter().map(u32::to_string).collect();
+        let _ = writeln!(out, "pins = [{}]", pins.join(", "));
+        let _ = writeln!(out, "shear = {}", c.edges.shear);
+        let _ = writeln!(out, "bend = {}", c.edges.bend);
+        if self.effects.compliance != 0.0 {
+            let _ = writeln!(
+                out,
+                "compliance = {}  # m/N per constraint",
+                num(self.effects.compliance)
+            );
+        }
+        if fx.bend_stiffness != 0.0 {
+            let _ = writeln!(
+                out,
+                "bend_stiffness = {}  # N/m on the bend pairs",
+                num(fx.bend_stiffness)
+            );
+        }
+        if fx.damping != 0.0 {
+            let _ = writeln!(out, "damping = {}  # 1/s", num(fx.damping));
+        }
+        if fx.drag_coefficient != 0.0 || fx.wind != Vector3::zeros() {
+            let _ = writeln!(out, "\n[air]");
+            let _ = writeln!(out, "density = {}  # kg/m^3", num(fx.air_density));
+            let _ = writeln!(out, "drag_coefficient = {}", num(fx.drag_coefficient));
+            let _ = writeln!(out, "wind = {}  # m/s", vec3(&fx.wind));
+        }
+        for p in &self.effects.point_masses {
+            let _ = writeln!(out, "\n[[point_masses]]");
+            let _ = writeln!(out, "vertex = {}", p.vertex);
+            let _ = writeln!(out, "mass = {}  # kg", num(p.mass));
+        }
+        for collider in &self.colliders {
+            let _ = writeln!(out, "\n[[colliders]]");
+            match &collider.shape {
+                Shape::Ball { center, radius } => {
+                    let _ = writeln!(out, "shape = \"ball\"");
+                    let _ = writeln!(out, "center = {}", vec3(center));
+                    let _ = writeln!(out, "radius = {}", num(*radius));
+                }
+                Shape::Plane { point, normal } => {
+                    let _ = writeln!(out, "shape = \"plane\"");
+                    let _ = writeln!(out, "point = {}", vec3(point));
+                    let _ = writeln!(out, "normal = {}", vec3(normal));
+                }
+                Shape::Cuboid {
+                    half_extents,
+                    world_from_local,
+                } => {
+                    let _ = writeln!(out, "shape = \"cuboid\"");
+                    let _ = writeln!(
+                        out,
+                        "center = {}  # m",
+                        vec3(&world_from_local.translation.vector)
+                    );
+                    let _ = writeln!(out, "half_extents = {}  # m", vec3(half_extents));
+                    let _ = writeln!(
+                        out,
+                        "rotation = {}  # rad, axis * angle",
+                        vec3(&world_from_local.rotation.scaled_axis())
+                    );
+                }
+                Shape::Capsule { a, b, radius } => {
+                    let _ = writeln!(out, "shape = \"capsule\"");
+                    let _ = writeln!(out, "a = {}  # m", vec3(a));
+                    let _ = writeln!(out, "b = {}  # m", vec3(b));
+                    let _ = writeln!(out, "radius = {}  # m", num(*radius));
+                }
+                Shape::TriMesh(mesh) => {
+                    let iso = mesh.world_from_local();
+                    let _ = writeln!(out, "shape = \"trimesh\"");
+                    let vertices: Vec<String> = mesh.vertices().iter().map(vec3).collect();
+                    let _ = writeln!(out, "vertices = [{}]  # m", vertices.join(", "));
+                    let triangles: Vec<String> = mesh
+                        .triangles()
+                        .iter()
+                        .map(|t| format!("[{}, {}, {}]", t[0], t[1], t[2]))
+                        .collect();
+                    let _ = writeln!(out, "triangles = [{}]", triangles.join(", "));
+                    let _ = writeln!(out, "translation = {}  # m", vec3(&iso.translation.vector));
+                    let _ = writeln!(
+                        out,
+                        "rotation = {}  # rad, axis * angle",
+                        vec3(&iso.rotation.scaled_axis())
+                    );
+                    if let Some(t) = mesh.shell_thickness() {
+                        let _ = writeln!(out, "shell_thickness = {}  # m", num(t));
+                    }
+                }
+                #[allow(unreachable_patterns)] // Shape is non-exhaustive: new shapes land here
+                other => {
+                    return Err(ClothError::Scene {
+                        scene: self.name.clone(),
+                        message: format!("cannot write collider shape {other:?} to a scene file"),
+                    });
+                }
+            }
+            let _ = writeln!(out, "friction = {}", num(collider.friction));
+        }
+        if self.pins_from_markers || self.pin_markers.is_some() || !self.pin_paths.is_empty() {
+            let _ = writeln!(out, "\n[pins]");
+            let _ = writeln!(out, "from_markers = {}", self.pins_from_markers);
+            if let Some(m) = &self.pin_markers {
+                let _ = writeln!(out, "markers = {}", text(&m.display().to_string()));
+            }
+            for (v, path) in &self.pin_paths {
+                let _ = writeln!(out, "\n[[pins.paths]]");
+                let _ = writeln!(out, "vertex = {v}");
+                let rows: Vec<String> = path
+                    .t()
+                    .iter()
+                    .zip(path.points())
+                    .map(|(t, p)| format!("[{}, {}, {}, {}]", num(*t), num(p.x), num(p.y), num(p.z)))
+                    .collect();
+                let _ = writeln!(out, "path = [{}]", rows.join(", "));
+            }
+        }
+        Ok(out)
     }
 
     /// The number of steps of `dt` that cover `duration`.
@@ -364,6 +746,59 @@ impl Scene {
         }
         Ok((world, cloth))
     }
+}
+
+/// The effect fields of a scene file, checked: the message names the field.
+fn effects_from_file(
+    file: &SceneFile,
+    n_vertices: usize,
+) -> std::result::Result<ClothEffects, String> {
+    let non_negative = |what: &str, v: f64| {
+        if v >= 0.0 && v.is_finite() {
+            Ok(v)
+        } else {
+            Err(format!("{what} must be non-negative and finite, found {v}"))
+        }
+    };
+    let c = &file.cloth;
+    let mut forces = ClothForces {
+        damping: non_negative("cloth.damping", c.damping)?,
+        bend_stiffness: non_negative("cloth.bend_stiffness", c.bend_stiffness)?,
+        ..ClothForces::default()
+    };
+    if let Some(air) = &file.air {
+        forces.drag_coefficient = non_negative("air.drag_coefficient", air.drag_coefficient)?;
+        let density = air.density.unwrap_or(AIR_DENSITY);
+        if !(density > 0.0 && density.is_finite()) {
+            return Err(format!(
+                "air.density must be positive and finite, found {density}"
+            ));
+        }
+        forces.air_density = density;
+        if let Some(w) = air.wind.iter().find(|w| !w.is_finite()) {
+            return Err(format!("air.wind must be finite, found {w}"));
+        }
+        forces.wind = Vector3::from(air.wind);
+    }
+    for (k, p) in file.point_masses.iter().enumerate() {
+        if p.vertex as usize >= n_vertices {
+            return Err(format!(
+                "point_masses[{k}].vertex must be below {n_vertices} (the grid's vertices), found {}",
+                p.vertex
+            ));
+        }
+        if !(p.mass > 0.0 && p.mass.is_finite()) {
+            return Err(format!(
+                "point_masses[{k}].mass must be positive and finite (kg), found {}",
+                p.mass
+            ));
+        }
+    }
+    Ok(ClothEffects {
+        forces,
+        compliance: non_negative("cloth.compliance", c.compliance)?,
+        point_masses: file.point_masses.clone(),
+    })
 }
 
 fn bundled(text: &str, label: &str) -> Scene {

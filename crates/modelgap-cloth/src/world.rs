@@ -4,6 +4,7 @@ use std::ops::Range;
 
 use nalgebra::Vector3;
 
+use crate::colouring::{self, ColouredSweep};
 use crate::constraints::DistanceConstraints;
 use crate::contact::{self, Collider, ColliderId, ContactState};
 use crate::error::{ClothError, Result};
@@ -34,6 +35,9 @@ struct SolverWorkspace {
     contacts: Vec<ContactState>,
     last_dt: Option<f64>,
     newton: Option<NewtonSolver>,
+    /// The coloured sweep (colouring and scratch), built on the first step
+    /// with [`SolverParams::coloured_sweep`], dropped on a topology change.
+    coloured: Option<ColouredSweep>,
 }
 
 /// All cloths and colliders of a simulation, stepped together.
@@ -56,6 +60,8 @@ pub struct ClothWorld {
     cloths: Vec<ClothEntry>,
     colliders: Vec<Collider>,
     kinematic: Vec<KinematicPin>,
+    /// External force on each particle (N) besides gravity, constant over a step.
+    external_forces: Vec<Vector3<f64>>,
     workspace: SolverWorkspace,
     time: f64,
 }
@@ -71,6 +77,7 @@ impl ClothWorld {
             cloths: Vec::new(),
             colliders: Vec::new(),
             kinematic: Vec::new(),
+            external_forces: Vec::new(),
             workspace: SolverWorkspace::default(),
             time: 0.0,
         }
@@ -97,6 +104,8 @@ impl ClothWorld {
             self.constraints
                 .push(first as u32 + a, first as u32 + b, rest);
         }
+        self.external_forces
+            .resize(self.particles.len(), Vector3::zeros());
         let id = ClothId(self.cloths.len() as u32);
         self.cloths.push(ClothEntry {
             particles: first..self.particles.len(),
@@ -105,6 +114,30 @@ impl ClothWorld {
         });
         self.topology_changed();
         Ok(id)
+    }
+
+    /// Makes every constraint of a cloth compliant: it stretches by
+    /// `compliance` m per newton of tension (0: inextensible, the default).
+    /// Both solvers then hold the compliant length `rest + α λ` within the
+    /// stretch tolerance instead of the rest length.
+    ///
+    /// # Errors
+    /// [`ClothError::UnknownCloth`], or [`ClothError::BadParameter`] for a
+    /// negative or non-finite compliance.
+    pub fn set_compliance(&mut self, cloth: ClothId, compliance: f64) -> Result<()> {
+        if !(compliance >= 0.0 && compliance.is_finite()) {
+            return Err(ClothError::BadParameter {
+                name: "compliance",
+                expected: "non-negative and finite (m/N)",
+                value: compliance,
+            });
+        }
+        let entry = self.cloths.get(cloth.0 as usize).ok_or(ClothError::UnknownCloth {
+            id: cloth.0,
+            n_cloths: self.cloths.len(),
+        })?;
+        self.constraints.compliance[entry.constraints.clone()].fill(compliance);
+        Ok(())
     }
 
     /// Adds a static collider.
@@ -170,6 +203,43 @@ impl ClothWorld {
     /// static and dynamic (that is a topology change: add the cloth again).
     pub fn particles_mut(&mut self) -> &mut ParticleSet {
         &mut self.particles
+    }
+
+    /// The external force on each particle besides gravity (N), one per
+    /// particle of the world, constant over a step: the step previews
+    /// `c + h v + h²/2 (g + F/m)`. Zero unless set.
+    #[must_use]
+    pub fn external_forces(&self) -> &[Vector3<f64>] {
+        &self.external_forces
+    }
+
+    /// The external forces (N), to set before a step (drag, wind, damping,
+    /// bending: evaluated from the state at the start of the step, see
+    /// `crate::forces`). Forces on static particles are ignored.
+    pub fn external_forces_mut(&mut self) -> &mut [Vector3<f64>] {
+        &mut self.external_forces
+    }
+
+    /// Sets the mass of a dynamic particle (kg).
+    ///
+    /// # Errors
+    /// [`ClothError::BadParameter`] for a non-positive or non-finite mass, a
+    /// particle past the world, or a static particle (it keeps `inv_mass = 0`:
+    /// static or dynamic is topology).
+    pub fn set_particle_mass(&mut self, particle: ParticleId, kg: f64) -> Result<()> {
+        let i = particle.index();
+        if !(kg > 0.0 && kg.is_finite()) || i >= self.particles.len() || self.particles.is_static(i)
+        {
+            return Err(ClothError::BadParameter {
+                name: "particle mass",
+                expected: "positive and finite, on a dynamic particle of the world",
+                value: kg,
+            });
+        }
+        self.particles.inv_mass[i] = 1.0 / kg;
+        // The Newton solver caches mass-dependent scalings.
+        self.topology_changed();
+        Ok(())
     }
 
     /// All distance constraints of the world.
@@ -256,6 +326,7 @@ impl ClothWorld {
 
     fn topology_changed(&mut self) {
         self.workspace.newton = None;
+        self.workspace.coloured = None;
         self.workspace.mu.clear();
         self.workspace.mu.resize(self.constraints.len(), 0.0);
         self.workspace.last_dt = None;
@@ -283,10 +354,12 @@ impl ClothWorld {
         ws.pred.clear();
         ws.contacts.clear();
         ws.contacts.resize(n, ContactState::default());
+        let forces = &self.external_forces;
         for i in 0..n {
             let x = ps.positions[i];
             ws.pred.push(if ps.inv_mass[i] > 0.0 {
-                x + h * ps.velocities[i] + 0.5 * h * h * g
+                let a = g + forces[i] * ps.inv_mass[i];
+                x + h * ps.velocities[i] + 0.5 * h * h * a
             } else {
                 x
             });
@@ -309,7 +382,13 @@ impl ClothWorld {
                 let scale = (h / last) * (h / last);
                 ws.mu.iter_mut().for_each(|m| *m *= scale);
                 let cold = cs.max_stretch(&ws.pred);
-                solver::apply_impulses(cs, &ps.inv_mass, &ws.mu, &mut ws.pred);
+                // Newton starts from the free preview with these impulses
+                // (an inconsistent but close start: applying them to the
+                // positions first, one after the other, can stretch a
+                // swinging cloth by 100 % and cost dozens of iterations).
+                if !newton {
+                    solver::apply_impulses(cs, &ps.inv_mass, &ws.mu, &mut ws.pred);
+                }
                 let warm = cs.max_stretch(&ws.pred);
                 if warm.is_nan() || (warm >= cold && !newton) {
                     ws.pred.clone_from(&ws.free);
@@ -332,6 +411,7 @@ impl ClothWorld {
                 free: &ws.free,
                 colliders: &self.colliders,
                 params: &self.params,
+                inv_h2: 1.0 / (h * h),
             };
             let out = global.solve(&input, &mut ws.pred, &mut ws.mu, &mut ws.contacts);
             report.iterations = out.iterations;
@@ -340,6 +420,20 @@ impl ClothWorld {
             report.converged = out.converged;
             report.max_stretch = out.max_stretch;
         } else {
+            let inv_h2 = 1.0 / (h * h);
+            // The coloured sweep, its colouring rebuilt when a particle
+            // turned static or dynamic since it was made.
+            let mut coloured = None;
+            if self.params.coloured_sweep {
+                let fits = ws
+                    .coloured
+                    .as_ref()
+                    .is_some_and(|s| s.fits(cs, &ps.inv_mass));
+                if !fits {
+                    ws.coloured = Some(ColouredSweep::new(cs, &ps.inv_mass)?);
+                }
+                coloured = ws.coloured.as_mut();
+            }
             loop {
                 let penetration = contact::project_contacts(
                     &self.colliders,
@@ -348,7 +442,10 @@ impl ClothWorld {
                     &mut ws.pred,
                     &mut ws.contacts,
                 );
-                let stretch = cs.max_stretch(&ws.pred);
+                let stretch = match coloured {
+                    Some(_) => colouring::max_error(cs, &ws.pred, &ws.mu, inv_h2),
+                    None => cs.max_error(&ws.pred, &ws.mu, inv_h2),
+                };
                 report.max_stretch = stretch;
                 if stretch <= tol && penetration <= contact_tol {
                     report.converged = true;
@@ -357,7 +454,11 @@ impl ClothWorld {
                 if report.iterations >= self.params.max_iterations || stretch.is_nan() {
                     break;
                 }
-                solver::gauss_seidel_sweep(cs, &ps.inv_mass, &mut ws.pred, &mut ws.mu);
+                let (k, pred, mu) = (&ps.inv_mass, &mut ws.pred, &mut ws.mu);
+                match coloured.as_deref_mut() {
+                    Some(sweep) => sweep.sweep(cs, k, pred, mu, inv_h2),
+                    None => solver::gauss_seidel_sweep(cs, k, pred, mu, inv_h2),
+                }
                 report.iterations += 1;
             }
         }
@@ -366,7 +467,8 @@ impl ClothWorld {
         // received its impulses at the start of the step under constant force.
         for i in 0..n {
             if ps.inv_mass[i] > 0.0 {
-                ps.velocities[i] = (ws.pred[i] - ps.positions[i]) / h + 0.5 * h * g;
+                let a = g + forces[i] * ps.inv_mass[i];
+                ps.velocities[i] = (ws.pred[i] - ps.positions[i]) / h + 0.5 * h * a;
                 ps.positions[i] = ws.pred[i];
             } else {
                 ps.velocities[i] = Vector3::zeros();

@@ -237,3 +237,74 @@ fn bad_input_gives_typed_errors() {
     ));
     assert!(err.to_string().starts_with("mesh is empty"));
 }
+
+/// Every step of a reference scene with the global Newton solve converges:
+/// max stretch ≤ 1e-4, finite, and (for `drape`) at most 1 mm into the ball.
+fn newton_holds_the_scene(scene: &modelgap_cloth::Scene) {
+    let (mut world, _) = scene.build().unwrap();
+    world.params_mut().method = Method::Newton;
+    for step in 0..scene.n_steps() {
+        let r = world.step(scene.dt).unwrap();
+        assert!(
+            r.converged && r.max_stretch <= 1e-4 && all_finite(&world),
+            "{} step {step}: {r:?}",
+            scene.name
+        );
+        assert!(r.max_penetration <= 1e-3, "{} step {step}: {r:?}", scene.name);
+    }
+}
+
+#[test]
+fn newton_holds_two_corners_at_every_step() {
+    newton_holds_the_scene(&scenes::two_corners());
+}
+
+#[test]
+fn newton_holds_corner_at_every_step() {
+    newton_holds_the_scene(&scenes::corner());
+}
+
+#[test]
+fn newton_holds_drape_at_every_step() {
+    newton_holds_the_scene(&scenes::drape());
+}
+
+#[test]
+fn compliant_chain_stretches_by_compliance_times_tension() {
+    // A vertical chain of 5 links, 0.1 m each, 10 g per particle, hanging
+    // from a pin: at rest the top link carries the weight of the 5 particles
+    // below it, and a compliance α stretches it by α T.
+    for method in [Method::GaussSeidel, Method::Newton] {
+        let mut world = ClothWorld::new(SolverParams {
+            method,
+            ..SolverParams::default()
+        });
+        let positions: Vec<_> = (0..6)
+            .map(|i| nalgebra::Vector3::new(0.0, -0.1 * f64::from(i), 0.0))
+            .collect();
+        let mesh = modelgap_cloth::ClothMesh {
+            positions,
+            masses: vec![0.01; 6],
+            edges: (0..5).map(|i| [i, i + 1]).collect(),
+            triangles: Vec::new(),
+            pinned: vec![0],
+        };
+        let chain = world.add_cloth(mesh).unwrap();
+        let alpha = 1e-3; // m/N
+        world.set_compliance(chain, alpha).unwrap();
+        // Averaged over the last 2 s: the chain still swings a little.
+        let (mut top, mut bottom) = (0.0, 0.0);
+        for step in 0..600 {
+            let r = world.step(0.01).unwrap();
+            assert!(r.converged, "{method:?}: {r:?}");
+            if step >= 400 {
+                let x = world.positions(chain);
+                top += ((x[0] - x[1]).norm() - 0.1) / 200.0;
+                bottom += ((x[4] - x[5]).norm() - 0.1) / 200.0;
+            }
+        }
+        let tension = 5.0 * 0.01 * 9.81;
+        approx::assert_relative_eq!(top, alpha * tension, max_relative = 0.02);
+        approx::assert_relative_eq!(bottom, alpha * 0.01 * 9.81, max_relative = 0.05);
+    }
+}

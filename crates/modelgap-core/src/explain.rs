@@ -95,7 +95,7 @@ impl std::fmt::Debug for ExplainOptions {
 }
 
 /// The answer of [`explain`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Verdict {
     /// The residual is what noise leaves: no effect is missing.
@@ -121,7 +121,7 @@ impl std::fmt::Display for Verdict {
 }
 
 /// One fitted parameter.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct FittedParam {
     /// Name.
     pub name: String,
@@ -135,7 +135,7 @@ pub struct FittedParam {
 }
 
 /// A candidate after its fit.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct RankedCandidate {
     /// The candidate.
     pub candidate: Candidate,
@@ -171,7 +171,7 @@ impl RankedCandidate {
 }
 
 /// What one output looks like before and after the chosen effects.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct OutputSummary {
     /// Output name.
     pub name: String,
@@ -188,7 +188,7 @@ pub struct OutputSummary {
 }
 
 /// The result of [`explain`].
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct Explanation {
     /// Model name.
     pub model: String,

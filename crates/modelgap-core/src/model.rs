@@ -71,6 +71,23 @@ pub trait Model: Send + Sync {
     /// [`crate::CoreError::Model`] when an effect does not fit the model.
     fn with_effects(&self, effects: &[Effect]) -> Result<Box<dyn Model>>;
 
+    /// The model's own predictability band on `rec`: per output and per
+    /// sample, how far (in the output's unit, ≥ 0) a prediction of the same
+    /// nominal model may lie from another equally valid one — the spread
+    /// between a run at the model's step and at half of it, or under tiny
+    /// perturbations of the initial state. A cloth that snaps taut on its
+    /// pins branches at each snap, and its predictions at h and h/2 can
+    /// differ by centimetres: [`crate::compare()`] counts as model failure
+    /// only what lies beyond both this spread and the measurement noise.
+    /// `None` (the default) when the model's prediction is sharp.
+    ///
+    /// # Errors
+    /// [`crate::CoreError::Model`] when the model cannot simulate the recording.
+    fn prediction_spread(&self, rec: &Recording) -> Result<Option<Prediction>> {
+        let _ = rec;
+        Ok(None)
+    }
+
     /// The model as the text of its file format (a bond-graph TOML), if it is
     /// file-based; after [`Model::with_effects`] it holds the new elements.
     fn to_file_text(&self) -> Option<String> {

@@ -8,12 +8,15 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any, Optional
 
+import numpy as np
+import numpy.typing as npt
+
 from ._modelgap import Comparison, Explanation
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
 
-__all__ = ["measured_vs_model", "ranking", "residual"]
+__all__ = ["cloth_error", "measured_vs_model", "ranking", "residual"]
 
 
 def _axes(ax: Optional[Axes]) -> Axes:
@@ -22,9 +25,7 @@ def _axes(ax: Optional[Axes]) -> Axes:
     try:
         import matplotlib.pyplot as plt
     except ImportError as e:  # pragma: no cover - depends on the environment
-        raise ImportError(
-            "modelgap.plot needs matplotlib: pip install 'modelgap[plot]'"
-        ) from e
+        raise ImportError("modelgap.plot needs matplotlib: pip install 'modelgap[plot]'") from e
     _, new = plt.subplots()
     return new
 
@@ -92,4 +93,70 @@ def ranking(explanation: Explanation, ax: Optional[Axes] = None, top: int = 10) 
     ax.set_yticklabels(names)
     ax.set_xlabel("evidence (BIC difference)")
     ax.set_title(f"{explanation.model}: {explanation.verdict}")
+    return ax
+
+
+_AXIS = {"x": 0, "y": 1, "z": 2}
+
+
+def _triangulation(u: Any, v: Any, triangles: Any) -> Any:
+    from matplotlib.tri import Triangulation
+
+    return Triangulation(u, v, triangles)
+
+
+def cloth_error(
+    vertices: npt.ArrayLike,
+    triangles: npt.ArrayLike,
+    error: npt.ArrayLike,
+    ax: Optional[Axes] = None,
+    *,
+    ids: Optional[npt.ArrayLike] = None,
+    view: str = "xy",
+    cmap: str = "viridis",
+    label: str = "error (m)",
+) -> Axes:
+    """The cloth error map: a per-vertex error coloured on the mesh.
+
+    ``vertices`` ``(n, 3)`` (m) and ``triangles`` ``(m, 3)`` give the mesh (e.g.
+    ``world.positions()`` and ``world.triangles()``), ``error`` one value per vertex, or one
+    per vertex of ``ids`` (e.g. the ``(ids, rms)`` of ``cloth.marker_errors``). ``view``
+    names the two world axes drawn (``"xy"``: a hanging cloth from the front, ``"xz"``:
+    from above). With every vertex known the error is shaded over the triangles; with
+    ``ids`` the mesh is drawn as a wireframe and the vertices as coloured dots. A colour bar
+    labelled ``label`` is added.
+    """
+    if len(view) != 2 or view[0] not in _AXIS or view[1] not in _AXIS or view[0] == view[1]:
+        raise ValueError(f'view must name two different axes of "x", "y", "z", found "{view}"')
+    xyz = np.asarray(vertices, dtype=np.float64)
+    tri = np.asarray(triangles)
+    err = np.asarray(error, dtype=np.float64)
+    if xyz.ndim != 2 or xyz.shape[1] != 3:
+        raise ValueError(f"vertices must be (n, 3), found shape {xyz.shape}")
+    if tri.ndim != 2 or tri.shape[1] != 3:
+        raise ValueError(f"triangles must be (m, 3), found shape {tri.shape}")
+    u, v = xyz[:, _AXIS[view[0]]], xyz[:, _AXIS[view[1]]]
+    mappable: Any
+    if ids is None:
+        if err.shape != (len(xyz),):
+            raise ValueError(
+                f"error must hold one value per vertex ({len(xyz)},), found shape {err.shape}"
+            )
+        ax = _axes(ax)
+        mappable = ax.tripcolor(_triangulation(u, v, tri), err, shading="gouraud", cmap=cmap)
+    else:
+        idx = np.asarray(ids, dtype=np.int64)
+        if err.shape != idx.shape or idx.ndim != 1:
+            raise ValueError(
+                f"error must hold one value per id {idx.shape}, found shape {err.shape}"
+            )
+        if idx.size and (idx.min() < 0 or idx.max() >= len(xyz)):
+            raise ValueError(f"ids must be vertex indices below {len(xyz)}")
+        ax = _axes(ax)
+        ax.triplot(_triangulation(u, v, tri), color="0.75", lw=0.4)
+        mappable = ax.scatter(u[idx], v[idx], c=err, cmap=cmap, s=40, zorder=3)
+    ax.figure.colorbar(mappable, ax=ax, label=label)
+    ax.set_aspect("equal")
+    ax.set_xlabel(f"{view[0]} (m)")
+    ax.set_ylabel(f"{view[1]} (m)")
     return ax

@@ -6,7 +6,7 @@ use std::fmt;
 use crate::math::DMatrix;
 
 /// Why a fit stopped. Every outcome leaves a usable [`FitReport`]: the best point found.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Termination {
     /// A tolerance of [`super::FitOptions`] was met: the gradient is orthogonal to the

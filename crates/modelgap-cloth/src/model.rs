@@ -1,0 +1,831 @@
+//! [`ClothModel`]: a cloth scene as a [`modelgap_core::Model`], the seam the
+//! measurement loop (compare, explain, add an effect) works through.
+//!
+//! # API (stable: the CLI, the report and Python build on it)
+//!
+//! - [`ClothModel::new`]`(scene)`, [`ClothModel::from_path`]`(path)`;
+//!   [`ClothModel::scene`], [`ClothModel::settings`],
+//!   [`ClothModel::with_settings`] ([`PredictSettings`]: solver method,
+//!   tolerance, step divisor).
+//! - The [`Model`] impl: outputs `m{id}.x`, `m{id}.y`, `m{id}.z` for every
+//!   vertex `id` of the scene's grid (`row * nx + col`), unit `m`;
+//!   `predict_with` runs the scene **from its initial state** (simulated time
+//!   0 is recording time 0) and predicts the marker signals the recording
+//!   holds, at its times (linear between steps when a sample falls between
+//!   two); pinned vertices follow the recording's markers when the scene
+//!   says `pins.from_markers`. `candidates` is the menu below;
+//!   `with_effects` returns a new `ClothModel` whose scene holds the fitted
+//!   terms; `to_file_text` is that scene's TOML file;
+//!   `prediction_spread` is the model's predictability band.
+//! - [`markers_to_recording`] / [`recording_to_markers`]: a
+//!   [`MarkerRecording`] as a core [`Recording`] with signals `m{id}.x|y|z`
+//!   and back; [`marker_signal`] and [`parse_marker_signal`] name them.
+//! - [`simulate_markers`]: the scene (with effects) at given times, as marker
+//!   frames — what recordings are made with ([`crate::hidden`]).
+//!
+//! # Candidate effects
+//!
+//! | id | name | parameters |
+//! |---|---|---|
+//! | `air-drag` | aerodynamic drag on the cloth's triangles | `drag_coefficient` (1) |
+//! | `wind` | a constant wind (drag on the velocity relative to the air) | [`drag_coefficient`], `wind_x`, `wind_y`, `wind_z` (m/s) |
+//! | `damping` | velocity damping −c m v | `damping` (1/s) |
+//! | `bending` | bending stiffness (springs on the grid's bend pairs) | `bend_stiffness` (N/m) |
+//! | `compliance` | stretch compliance (the cloth is not quite inextensible) | `compliance` (m/N) |
+//! | `mass` | the cloth's total mass is off | `total_mass` (kg) |
+//! | `point-mass` | an extra point mass at a vertex | `col`, `row` (grid starts), `mass` (kg) |
+//! | `friction@collider{k}` | friction on collider k is off | `friction` (1) |
+//!
+//! `wind` fits the drag coefficient too when the scene has no drag. The
+//! point mass sits at the vertex nearest to `(col, row)`: the place is
+//! chosen by the grid of starts (4 × 4 places spread over the grid, each
+//! scored with its best mass) and the fit refines the mass; `fix` writes it
+//! as a `[[point_masses]]` entry. (A mass split bilinearly over the four
+//! vertices around a fractional place makes the cost kinked at every
+//! vertex, and the fit stalls beside the true one.) Bounds keep the
+//! explicit forces stable at the scene's step (damping `c h ≤ 0.2`,
+//! bending `k h²/m ≤ 0.25`).
+//!
+//! # Example
+//!
+//! ```
+//! use modelgap_cloth::model::{ClothModel, markers_to_recording, simulate_markers};
+//! use modelgap_cloth::scenes;
+//! use modelgap_core::Model as _;
+//!
+//! let scene = scenes::corner().resized(5, 5)?;
+//! let model = ClothModel::new(scene.clone());
+//! let t: Vec<f64> = (0..=10).map(|k| 0.01 * k as f64).collect();
+//! let frames = simulate_markers(&scene, &[24], &t, model.settings(), None)?;
+//! let rec = markers_to_recording(&frames)?;
+//! let drag = model.candidates().into_iter().find(|c| c.id == "air-drag").unwrap();
+//! let slowed = model.predict_with(&rec, &[(&drag, &[2.0])])?;
+//! // The far corner falls less with drag.
+//! assert!(slowed.get("m24.y").unwrap()[10] > rec.values("m24.y")?[10]);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use modelgap_core::noise::Gaussian;
+use modelgap_core::{
+    Candidate, CoreError, Effect, EffectKind, EffectParam, Model, Prediction, Recording, Signal,
+};
+use nalgebra::Vector3;
+
+use crate::error::{ClothError, Result};
+use crate::forces::{BendPair, PointMass, grid_bend_pairs};
+use crate::markers::MarkerRecording;
+use crate::scenes::Scene;
+use crate::solver::Method;
+
+/// Factor on the predictability spread: the spread between runs at `h` and
+/// `h/2` is half the error of the `h` run for a first-order scheme
+/// (Richardson), and one perturbed run samples the branching of a snap once.
+pub const SPREAD_FACTOR: f64 = 2.0;
+
+/// Size of the random initial perturbation of the spread's perturbed run (m):
+/// far below any measurement, above rounding.
+pub const SPREAD_PERTURBATION: f64 = 1e-6;
+
+/// Half-width of the running maximum that turns the spread into an envelope
+/// (samples): two runs that cross each other are not in agreement there.
+const SPREAD_ENVELOPE: usize = 5;
+
+/// Largest damping rate × step of the `damping` candidate (dimensionless).
+const MAX_DAMPING_STEP: f64 = 0.2;
+
+/// Largest bending stiffness × step² / particle mass of the `bending` candidate.
+const MAX_BEND_STEP: f64 = 0.25;
+
+/// How a [`ClothModel`] simulates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PredictSettings {
+    /// Constraint method; default [`Method::Newton`].
+    pub method: Method,
+    /// Relative stretch tolerance; `None` (default) uses the scene's.
+    pub stretch_tolerance: Option<f64>,
+    /// Iteration limit per step; default 200.
+    pub max_iterations: usize,
+    /// Steps per scene step (the step is the scene's `dt` divided by it); default 1.
+    pub step_divisor: usize,
+    /// Standard deviation of a random displacement of every dynamic vertex at
+    /// the start (m); default 0.
+    pub perturbation: f64,
+    /// Seed of that displacement.
+    pub seed: u64,
+}
+
+impl Default for PredictSettings {
+    fn default() -> Self {
+        Self {
+            method: Method::Newton,
+            stretch_tolerance: None,
+            max_iterations: 200,
+            step_divisor: 1,
+            perturbation: 0.0,
+            seed: 1,
+        }
+    }
+}
+
+/// A cloth scene that the measurement loop can hold against a marker recording.
+#[derive(Clone, Debug)]
+pub struct ClothModel {
+    scene: Scene,
+    settings: PredictSettings,
+    /// Plain descriptions of the effects built in, for the file's header.
+    added: Vec<String>,
+}
+
+impl ClothModel {
+    /// A model of `scene`, simulated with the default [`PredictSettings`].
+    #[must_use]
+    pub fn new(scene: Scene) -> Self {
+        Self {
+            scene,
+            settings: PredictSettings::default(),
+            added: Vec::new(),
+        }
+    }
+
+    /// A model of the scene file at `path`.
+    ///
+    /// # Errors
+    /// As [`Scene::from_path`].
+    pub fn from_path(path: &Path) -> Result<Self> {
+        Ok(Self::new(Scene::from_path(path)?))
+    }
+
+    /// The same model simulated with `settings`.
+    #[must_use]
+    pub fn with_settings(mut self, settings: PredictSettings) -> Self {
+        self.settings = settings;
+        self
+    }
+
+    /// The scene (with every effect built in so far).
+    #[must_use]
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// How the model simulates.
+    #[must_use]
+    pub fn settings(&self) -> &PredictSettings {
+        &self.settings
+    }
+
+    /// The scene with `effects` applied in turn.
+    ///
+    /// # Errors
+    /// [`ClothError::Scene`] for an effect the scene does not offer, or
+    /// values of the wrong count, non-finite, or outside the candidate's bounds.
+    pub fn edited(&self, effects: &[(&Candidate, &[f64])]) -> Result<Scene> {
+        let mut scene = self.scene.clone();
+        for (candidate, values) in effects {
+            apply(&mut scene, candidate, values)?;
+        }
+        Ok(scene)
+    }
+
+    /// Predicts the recording's marker signals with `effects`, simulated with `settings`.
+    fn predict_settings(
+        &self,
+        rec: &Recording,
+        effects: &[(&Candidate, &[f64])],
+        settings: &PredictSettings,
+    ) -> Result<Prediction> {
+        let scene = self.edited(effects)?;
+        let n_vertices = scene.cloth.nx * scene.cloth.nz;
+        let signals: Vec<(&str, u32, usize)> = rec
+            .signals()
+            .iter()
+            .filter_map(|s| {
+                let (id, axis) = parse_marker_signal(&s.name)?;
+                ((id as usize) < n_vertices).then_some((s.name.as_str(), id, axis))
+            })
+            .collect();
+        if signals.is_empty() {
+            return Err(ClothError::Scene {
+                scene: scene.name.clone(),
+                message: format!(
+                    "the recording holds no marker signal m{{id}}.x|y|z of the grid's {n_vertices} vertices"
+                ),
+            });
+        }
+        let mut ids: Vec<u32> = signals.iter().map(|s| s.1).collect();
+        ids.sort_unstable();
+        ids.dedup();
+        let pins = if scene.pins_from_markers {
+            Some(recording_to_markers(rec)?)
+        } else {
+            None
+        };
+        let frames = simulate_markers(&scene, &ids, rec.t(), settings, pins.as_ref())?;
+        let values = signals
+            .iter()
+            .map(|&(_, id, axis)| {
+                let k = ids.binary_search(&id).unwrap_or(0);
+                frames.positions().iter().map(|f| f[k][axis]).collect()
+            })
+            .collect();
+        Ok(Prediction {
+            names: signals.iter().map(|s| s.0.to_string()).collect(),
+            values,
+        })
+    }
+}
+
+impl From<Scene> for ClothModel {
+    fn from(scene: Scene) -> Self {
+        Self::new(scene)
+    }
+}
+
+/// The name of a marker coordinate signal: `m{id}.x` (axis 0), `.y` (1), `.z` (2).
+#[must_use]
+pub fn marker_signal(id: u32, axis: usize) -> String {
+    format!("m{id}.{}", ["x", "y", "z"][axis.min(2)])
+}
+
+/// The marker id and axis (0, 1, 2 for x, y, z) of a signal named `m{id}.x|y|z`.
+#[must_use]
+pub fn parse_marker_signal(name: &str) -> Option<(u32, usize)> {
+    let rest = name.strip_prefix('m')?;
+    let (id, axis) = rest.split_once('.')?;
+    let axis = match axis {
+        "x" => 0,
+        "y" => 1,
+        "z" => 2,
+        _ => return None,
+    };
+    if id.is_empty() || !id.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    Some((id.parse().ok()?, axis))
+}
+
+/// A marker recording as a core recording: signals `m{id}.x`, `m{id}.y`,
+/// `m{id}.z` per marker, in the recording's marker order.
+///
+/// # Errors
+/// [`ClothError::Core`] if the recording cannot be built (it always can from
+/// a valid [`MarkerRecording`]).
+pub fn markers_to_recording(markers: &MarkerRecording) -> Result<Recording> {
+    let mut signals = Vec::with_capacity(3 * markers.n_markers());
+    for (k, &id) in markers.ids().iter().enumerate() {
+        for axis in 0..3 {
+            let values = markers.positions().iter().map(|f| f[k][axis]).collect();
+            signals.push(Signal::new(marker_signal(id, axis), values));
+        }
+    }
+    Ok(Recording::new(markers.t().to_vec(), signals)?)
+}
+
+/// The markers of a core recording: every id with all three signals
+/// `m{id}.x|y|z`, in the order of their first signal; other signals are ignored.
+///
+/// # Errors
+/// [`ClothError::MarkerField`] when the recording holds no complete marker.
+pub fn recording_to_markers(rec: &Recording) -> Result<MarkerRecording> {
+    let mut ids: Vec<u32> = Vec::new();
+    for s in rec.signals() {
+        if let Some((id, _)) = parse_marker_signal(&s.name)
+            && !ids.contains(&id)
+        {
+            ids.push(id);
+        }
+    }
+    let mut tracks: Vec<(u32, [&[f64]; 3])> = Vec::new();
+    for id in ids {
+        let axis = |a: usize| {
+            rec.signal(&marker_signal(id, a))
+                .map(|s| s.values.as_slice())
+        };
+        if let (Some(x), Some(y), Some(z)) = (axis(0), axis(1), axis(2)) {
+            tracks.push((id, [x, y, z]));
+        }
+    }
+    if tracks.is_empty() {
+        return MarkerRecording::new(rec.t().to_vec(), Vec::new(), Vec::new());
+    }
+    let frames = (0..rec.len())
+        .map(|k| {
+            tracks
+                .iter()
+                .map(|(_, [x, y, z])| [x[k], y[k], z[k]])
+                .collect()
+        })
+        .collect();
+    MarkerRecording::new(
+        rec.t().to_vec(),
+        tracks.iter().map(|t| t.0).collect(),
+        frames,
+    )
+}
+
+/// Runs `scene` from its initial state and records vertices `ids` at times
+/// `t` (s; simulated time 0 is the scene's start, samples at or before it
+/// get the initial positions, samples between steps are interpolated
+/// linearly). The scene's effects act: forces each step, compliance, point
+/// masses. With `pins`, pinned vertices whose ids it holds follow it.
+///
+/// # Errors
+/// [`ClothError::VertexOutOfRange`] for an id past the grid; the scene's and
+/// the steps' errors; [`ClothError::MarkerField`] etc. if the frames cannot
+/// form a recording (an empty `t` or `ids`).
+pub fn simulate_markers(
+    scene: &Scene,
+    ids: &[u32],
+    t: &[f64],
+    settings: &PredictSettings,
+    pins: Option<&MarkerRecording>,
+) -> Result<MarkerRecording> {
+    let (mut world, cloth) = scene.build_with_markers(pins)?;
+    let n = world.positions(cloth).len();
+    if let Some(&bad) = ids.iter().find(|&&id| id as usize >= n) {
+        return Err(ClothError::VertexOutOfRange {
+            vertex: bad as usize,
+            n_vertices: n,
+        });
+    }
+    {
+        let p = world.params_mut();
+        p.method = settings.method;
+        p.max_iterations = settings.max_iterations;
+        if let Some(tol) = settings.stretch_tolerance {
+            p.stretch_tolerance = tol;
+        }
+    }
+    let effects = &scene.effects;
+    if effects.compliance > 0.0 {
+        world.set_compliance(cloth, effects.compliance)?;
+    }
+    for pm in &effects.point_masses {
+        let particle = world.particle(cloth, pm.vertex as usize)?;
+        let k = world.particles().inv_mass[particle.index()];
+        if k > 0.0 {
+            world.set_particle_mass(particle, 1.0 / k + pm.mass)?;
+        }
+    }
+    let first = world.particle(cloth, 0)?.index();
+    if settings.perturbation > 0.0 {
+        let mut g = Gaussian::new(settings.seed);
+        let ps = world.particles_mut();
+        for i in first..first + n {
+            if ps.inv_mass[i] > 0.0 {
+                let d = Vector3::new(g.sample(), g.sample(), g.sample());
+                ps.positions[i] += settings.perturbation * d;
+            }
+        }
+    }
+    let masses: Vec<f64> = world.particles().inv_mass[first..first + n]
+        .iter()
+        .map(|&k| if k > 0.0 { 1.0 / k } else { 0.0 })
+        .collect();
+    let forces = &effects.forces;
+    let bend: Vec<BendPair> = if forces.bend_stiffness > 0.0 {
+        grid_bend_pairs(scene.cloth.nx, scene.cloth.nz, world.positions(cloth))
+    } else {
+        Vec::new()
+    };
+    let triangles = world.triangles(cloth).to_vec();
+    let mut out = vec![Vector3::zeros(); n];
+    let h = scene.dt / settings.step_divisor.max(1) as f64;
+    let take = |x: &[Vector3<f64>]| -> Vec<[f64; 3]> {
+        ids.iter()
+            .map(|&id| {
+                let p = x[id as usize];
+                [p.x, p.y, p.z]
+            })
+            .collect()
+    };
+    let mut frames = Vec::with_capacity(t.len());
+    let mut steps = 0usize;
+    let mut prev = take(world.positions(cloth));
+    for &tj in t {
+        // Step until the step's end reaches the sample (to within rounding).
+        while (steps as f64) * h < tj - 1e-9 * h {
+            prev = take(world.positions(cloth));
+            if !forces.is_none() {
+                forces.evaluate(
+                    world.positions(cloth),
+                    world.velocities(cloth),
+                    &masses,
+                    &triangles,
+                    &bend,
+                    &mut out,
+                );
+                world.external_forces_mut()[first..first + n].copy_from_slice(&out);
+            }
+            world.step(h)?;
+            steps += 1;
+        }
+        let now = take(world.positions(cloth));
+        let t_now = steps as f64 * h;
+        if steps == 0 || (t_now - tj).abs() <= 1e-9 * h {
+            frames.push(now);
+        } else {
+            // Between the last two steps.
+            let s = 1.0 - (t_now - tj) / h;
+            frames.push(
+                prev.iter()
+                    .zip(&now)
+                    .map(|(a, b)| std::array::from_fn(|i| a[i] + s * (b[i] - a[i])))
+                    .collect(),
+            );
+        }
+    }
+    MarkerRecording::new(t.to_vec(), ids.to_vec(), frames)
+}
+
+/// The typical sizes of a scene that set the candidates' scales and bounds.
+struct SceneScales {
+    n_vertices: usize,
+    particle_mass: f64,
+    spacing: f64,
+    gravity: f64,
+    dt: f64,
+}
+
+impl SceneScales {
+    fn of(scene: &Scene) -> Self {
+        let c = &scene.cloth;
+        Self {
+            n_vertices: c.nx * c.nz,
+            particle_mass: c.particle_mass,
+            spacing: c.spacing,
+            gravity: scene.params.gravity.norm().max(1e-3),
+            dt: scene.dt,
+        }
+    }
+}
+
+fn param(name: &str, unit: &str, initial: f64, bounds: (f64, f64), scale: f64) -> EffectParam {
+    EffectParam {
+        name: name.to_string(),
+        unit: unit.to_string(),
+        initial,
+        lower: bounds.0,
+        upper: bounds.1,
+        scale,
+        grid: 0,
+    }
+}
+
+/// The candidate effects of a scene (see the [module docs](self)).
+#[must_use]
+pub fn candidates(scene: &Scene) -> Vec<Candidate> {
+    let s = SceneScales::of(scene);
+    let fx = &scene.effects.forces;
+    let kind = |current: f64| {
+        if current > 0.0 {
+            EffectKind::ParameterDeviation
+        } else {
+            EffectKind::MissingElement
+        }
+    };
+    let cd_bounds = (0.0, 5.0);
+    let mut out = vec![Candidate {
+        id: "air-drag".into(),
+        name: "aerodynamic drag on the cloth's triangles".into(),
+        kind: kind(fx.drag_coefficient),
+        acts_on: "cloth".into(),
+        params: vec![param(
+            "drag_coefficient",
+            "1",
+            fx.drag_coefficient,
+            cd_bounds,
+            0.2,
+        )],
+    }];
+    let mut wind = Vec::new();
+    if fx.drag_coefficient == 0.0 {
+        wind.push(param("drag_coefficient", "1", 1.0, cd_bounds, 0.2));
+    }
+    for (axis, w) in ["wind_x", "wind_y", "wind_z"].iter().zip(fx.wind.iter()) {
+        wind.push(param(axis, "m/s", *w, (-20.0, 20.0), 0.5));
+    }
+    out.push(Candidate {
+        id: "wind".into(),
+        name: "a constant wind".into(),
+        kind: if fx.wind == Vector3::zeros() {
+            EffectKind::MissingElement
+        } else {
+            EffectKind::ParameterDeviation
+        },
+        acts_on: "cloth".into(),
+        params: wind,
+    });
+    let max_damping = MAX_DAMPING_STEP / s.dt;
+    out.push(Candidate {
+        id: "damping".into(),
+        name: "velocity damping (a force -c m v on every particle)".into(),
+        kind: kind(fx.damping),
+        acts_on: "cloth".into(),
+        params: vec![param(
+            "damping",
+            "1/s",
+            fx.damping,
+            (0.0, max_damping.max(fx.damping)),
+            max_damping / 40.0,
+        )],
+    });
+    let max_bend = MAX_BEND_STEP * s.particle_mass / (s.dt * s.dt);
+    out.push(Candidate {
+        id: "bending".into(),
+        name: "bending stiffness (springs on the grid's bend pairs)".into(),
+        kind: kind(fx.bend_stiffness),
+        acts_on: "cloth".into(),
+        params: vec![param(
+            "bend_stiffness",
+            "N/m",
+            fx.bend_stiffness,
+            (0.0, max_bend.max(fx.bend_stiffness)),
+            max_bend / 20.0,
+        )],
+    });
+    // 1 % stretch of a link under the weight of a column of the grid.
+    let column_weight = s.particle_mass * s.gravity * scene.cloth.nz as f64;
+    let compliance_scale = 0.01 * s.spacing / column_weight;
+    let compliance = scene.effects.compliance;
+    out.push(Candidate {
+        id: "compliance".into(),
+        name: "stretch compliance (the cloth is not quite inextensible)".into(),
+        kind: kind(compliance),
+        acts_on: "cloth".into(),
+        params: vec![param(
+            "compliance",
+            "m/N",
+            compliance,
+            (0.0, (20.0 * compliance_scale).max(2.0 * compliance)),
+            compliance_scale,
+        )],
+    });
+    let total = s.particle_mass * s.n_vertices as f64;
+    out.push(Candidate {
+        id: "mass".into(),
+        name: "the cloth's total mass is off".into(),
+        kind: EffectKind::ParameterDeviation,
+        acts_on: "cloth".into(),
+        params: vec![param(
+            "total_mass",
+            "kg",
+            total,
+            (0.1 * total, 10.0 * total),
+            0.1 * total,
+        )],
+    });
+    let (nx, nz) = (scene.cloth.nx, scene.cloth.nz);
+    let mut col = param("col", "1", 0.0, (0.0, (nx - 1) as f64), 1.0);
+    col.grid = nx.min(4);
+    let mut row = param("row", "1", 0.0, (0.0, (nz - 1) as f64), 1.0);
+    row.grid = nz.min(4);
+    out.push(Candidate {
+        id: "point-mass".into(),
+        name: "an extra point mass at a vertex".into(),
+        kind: EffectKind::MissingElement,
+        acts_on: "a vertex (col, row) of the grid".into(),
+        params: vec![
+            col,
+            row,
+            param("mass", "kg", 0.0, (0.0, total), 5.0 * s.particle_mass),
+        ],
+    });
+    for (k, c) in scene.colliders.iter().enumerate() {
+        out.push(Candidate {
+            id: format!("friction@collider{k}"),
+            name: format!("friction on collider {k} is off"),
+            kind: EffectKind::ParameterDeviation,
+            acts_on: format!("collider {k}"),
+            params: vec![param("friction", "1", c.friction, (0.0, 2.0), 0.1)],
+        });
+    }
+    out
+}
+
+/// Applies a candidate's values to a scene.
+fn apply(scene: &mut Scene, candidate: &Candidate, values: &[f64]) -> Result<()> {
+    let bad = |message: String| ClothError::Scene {
+        scene: scene.name.clone(),
+        message: format!("effect {}: {message}", candidate.id),
+    };
+    if values.len() != candidate.params.len() {
+        return Err(bad(format!(
+            "expected {} values ({}), found {}",
+            candidate.params.len(),
+            candidate
+                .params
+                .iter()
+                .map(|p| p.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            values.len()
+        )));
+    }
+    for (p, &v) in candidate.params.iter().zip(values) {
+        if !(v.is_finite() && v >= p.lower && v <= p.upper) {
+            return Err(bad(format!(
+                "{} must be in [{}, {}] {}, found {v}",
+                p.name, p.lower, p.upper, p.unit
+            )));
+        }
+    }
+    let value = |name: &str| {
+        candidate
+            .params
+            .iter()
+            .position(|p| p.name == name)
+            .map(|i| values[i])
+    };
+    let (nx, nz) = (scene.cloth.nx, scene.cloth.nz);
+    if candidate.id == "point-mass" {
+        let (Some(col), Some(row), Some(mass)) = (value("col"), value("row"), value("mass")) else {
+            return Err(bad("expected parameters col, row and mass".into()));
+        };
+        if mass > 0.0 {
+            scene.effects.point_masses.push(PointMass {
+                vertex: nearest_vertex(col, row, nx, nz),
+                mass,
+            });
+        }
+        return Ok(());
+    }
+    if let Some(k) = candidate.id.strip_prefix("friction@collider") {
+        let collider = k
+            .parse::<usize>()
+            .ok()
+            .and_then(|k| scene.colliders.get_mut(k));
+        let (Some(collider), Some(mu)) = (collider, value("friction")) else {
+            return Err(bad(format!(
+                "the scene has {} colliders",
+                scene.colliders.len()
+            )));
+        };
+        collider.friction = mu;
+        return Ok(());
+    }
+    let fx = &mut scene.effects.forces;
+    let mut known = false;
+    for (p, &v) in candidate.params.iter().zip(values) {
+        known = true;
+        match p.name.as_str() {
+            "drag_coefficient" => fx.drag_coefficient = v,
+            "wind_x" => fx.wind.x = v,
+            "wind_y" => fx.wind.y = v,
+            "wind_z" => fx.wind.z = v,
+            "damping" => fx.damping = v,
+            "bend_stiffness" => fx.bend_stiffness = v,
+            "compliance" => scene.effects.compliance = v,
+            "total_mass" => scene.cloth.particle_mass = v / (nx * nz) as f64,
+            other => return Err(bad(format!("unknown parameter {other}"))),
+        }
+    }
+    if !known {
+        return Err(bad("the effect has no parameters".into()));
+    }
+    Ok(())
+}
+
+/// The vertex nearest to the grid place `(col, row)` (clamped to the grid).
+fn nearest_vertex(col: f64, row: f64, nx: usize, nz: usize) -> u32 {
+    let c = (col.round().max(0.0) as usize).min(nx - 1);
+    let r = (row.round().max(0.0) as usize).min(nz - 1);
+    (r * nx + c) as u32
+}
+
+/// The loop's error for a failed prediction or edit, naming the effects.
+fn model_error(effects: &[(&Candidate, &[f64])], e: &ClothError) -> CoreError {
+    let message = if effects.is_empty() {
+        e.to_string()
+    } else {
+        format!(
+            "with {}: {e}",
+            effects
+                .iter()
+                .map(|(c, v)| format!("{} at {v:?}", c.id))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    };
+    CoreError::Model { message }
+}
+
+/// Running maximum over ±`half` samples.
+fn envelope(x: &[f64], half: usize) -> Vec<f64> {
+    (0..x.len())
+        .map(|k| {
+            let lo = k.saturating_sub(half);
+            let hi = (k + half + 1).min(x.len());
+            x[lo..hi].iter().copied().fold(0.0, f64::max)
+        })
+        .collect()
+}
+
+impl Model for ClothModel {
+    fn name(&self) -> String {
+        self.scene.name.clone()
+    }
+
+    fn outputs(&self) -> Vec<String> {
+        let n = (self.scene.cloth.nx * self.scene.cloth.nz) as u32;
+        (0..n)
+            .flat_map(|id| (0..3).map(move |axis| marker_signal(id, axis)))
+            .collect()
+    }
+
+    fn unit(&self, output: &str) -> String {
+        if parse_marker_signal(output).is_some() {
+            "m".into()
+        } else {
+            String::new()
+        }
+    }
+
+    fn predict_with(
+        &self,
+        rec: &Recording,
+        effects: &[(&Candidate, &[f64])],
+    ) -> modelgap_core::Result<Prediction> {
+        self.predict_settings(rec, effects, &self.settings)
+            .map_err(|e| model_error(effects, &e))
+    }
+
+    fn candidates(&self) -> Vec<Candidate> {
+        candidates(&self.scene)
+    }
+
+    fn with_effects(&self, effects: &[Effect]) -> modelgap_core::Result<Box<dyn Model>> {
+        let pairs: Vec<(&Candidate, &[f64])> = effects
+            .iter()
+            .map(|e| (&e.candidate, e.values.as_slice()))
+            .collect();
+        let scene = self.edited(&pairs).map_err(|e| model_error(&pairs, &e))?;
+        let mut added = self.added.clone();
+        added.extend(effects.iter().map(|e| e.to_string()));
+        Ok(Box::new(ClothModel {
+            scene,
+            settings: self.settings.clone(),
+            added,
+        }))
+    }
+
+    /// The scene file ([`Scene::to_toml`]), headed by a comment line per
+    /// effect built in; `None` when the scene holds a collider the file
+    /// format cannot write.
+    fn to_file_text(&self) -> Option<String> {
+        let mut s = String::new();
+        for a in &self.added {
+            let _ = writeln!(s, "# added by explain: {a}");
+        }
+        s.push_str(&self.scene.to_toml().ok()?);
+        Some(s)
+    }
+
+    fn file_extension(&self) -> &'static str {
+        "toml"
+    }
+
+    /// The spread of the scene's prediction: [`SPREAD_FACTOR`] times the
+    /// larger of its distance to a run at half the step and to a run whose
+    /// dynamic vertices start displaced by [`SPREAD_PERTURBATION`], per
+    /// marker coordinate, as an envelope over ±5 samples.
+    fn prediction_spread(&self, rec: &Recording) -> modelgap_core::Result<Option<Prediction>> {
+        let nominal = self.predict(rec)?;
+        let half = PredictSettings {
+            step_divisor: 2 * self.settings.step_divisor.max(1),
+            ..self.settings.clone()
+        };
+        let perturbed = PredictSettings {
+            perturbation: SPREAD_PERTURBATION,
+            ..self.settings.clone()
+        };
+        let mut largest: Vec<Vec<f64>> =
+            nominal.values.iter().map(|v| vec![0.0; v.len()]).collect();
+        for settings in [half, perturbed] {
+            let other = self
+                .predict_settings(rec, &[], &settings)
+                .map_err(|e| model_error(&[], &e))?;
+            for ((l, a), b) in largest.iter_mut().zip(&nominal.values).zip(&other.values) {
+                for ((l, a), b) in l.iter_mut().zip(a).zip(b) {
+                    *l = l.max((a - b).abs());
+                }
+            }
+        }
+        let spread = Prediction {
+            names: nominal.names,
+            values: largest
+                .iter()
+                .map(|l| {
+                    envelope(l, SPREAD_ENVELOPE)
+                        .into_iter()
+                        .map(|v| SPREAD_FACTOR * v)
+                        .collect()
+                })
+                .collect(),
+        };
+        Ok(Some(spread))
+    }
+}
