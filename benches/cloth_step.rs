@@ -91,6 +91,22 @@ fn sweeps(c: &mut Criterion) {
     group.finish();
 }
 
+/// One strip sweep ([`Method::Strips`]: every row and column solved by the
+/// linear-time tridiagonal method) on the 30 × 30 corner: a step capped at
+/// one sweep without warm start, as the sweeps above.
+fn strip_sweep(c: &mut Criterion) {
+    let scene = scenes::corner();
+    let (mut world, _) = scene.build().unwrap();
+    world.params_mut().method = Method::Strips;
+    world.params_mut().max_iterations = LARGE_SWEEPS;
+    world.step_n(SETTLE_STEPS, scene.dt).unwrap();
+    world.params_mut().max_iterations = 1;
+    world.params_mut().warm_start = false;
+    c.bench_function("cloth/sweep/30x30/corner/strips", |b| {
+        b.iter(|| black_box(world.step(black_box(scene.dt)).unwrap()));
+    });
+}
+
 /// One step of the corner scene on 100 × 100 and 300 × 300 grids.
 fn large_steps(c: &mut Criterion) {
     let mut group = c.benchmark_group("cloth/step");
@@ -124,5 +140,5 @@ fn large_steps(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, scene_steps, sweeps, large_steps);
+criterion_group!(benches, scene_steps, sweeps, strip_sweep, large_steps);
 criterion_main!(benches);

@@ -20,7 +20,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use anyhow::Context as _;
-use modelgap::cloth::hidden::{HiddenCase, RecordingOptions, cases, record};
+use modelgap::cloth::hidden::{RecordingOptions, cases, record};
 use modelgap::cloth::model::recording_to_markers;
 
 /// Vertices per side of the demo cloth.
@@ -28,20 +28,6 @@ const GRID: usize = 7;
 
 /// Decimals of the marker positions (m) in the file.
 const DECIMALS: usize = 6;
-
-/// The case with its cloth held by clips: of the swing scene's top row only the even
-/// columns stay pinned (and follow the swing), so no edge joins two pins.
-fn clipped(mut case: HiddenCase) -> HiddenCase {
-    let nx = case.scene.cloth.nx as u32;
-    let clip = |v: u32| v >= nx || v % 2 == 0;
-    case.scene.cloth.pinned.retain(|&v| clip(v));
-    case.scene.pin_paths.retain(|(v, _)| clip(*v));
-    case.scene.description = format!(
-        "{n} x {n} cloth hanging from clips on every other vertex of its top row, swung 0.1 m at 1 Hz",
-        n = case.scene.cloth.nx
-    );
-    case
-}
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -54,7 +40,7 @@ fn main() -> anyhow::Result<()> {
         [name, csv, scene] => (name.clone(), PathBuf::from(csv), PathBuf::from(scene)),
         _ => anyhow::bail!("usage: make_cloth_demo_data [CASE OUT.csv SCENE.toml]"),
     };
-    let all: Vec<HiddenCase> = cases(GRID, GRID).into_iter().map(clipped).collect();
+    let all = cases(GRID, GRID);
     let case = all.iter().find(|c| c.name == name).with_context(|| {
         format!(
             "no cloth case `{name}`; the cases are {}",

@@ -191,8 +191,9 @@ fn bench_json(extra: &[&str]) -> serde_json::Value {
 #[test]
 fn bench_threads_run_the_coloured_sweep_with_the_same_result() {
     // Issue 4: the coloured sweep gives the same bits for any number of threads.
-    let one = bench_json(&["--threads", "1", "--tolerance", "1e-3"]);
-    let two = bench_json(&["--threads", "2", "--tolerance", "1e-3"]);
+    let gs = ["--method", "gauss-seidel", "--tolerance", "1e-3"];
+    let one = bench_json(&[&["--threads", "1"][..], &gs].concat());
+    let two = bench_json(&[&["--threads", "2"][..], &gs].concat());
     assert_eq!(
         (one["threads"].as_u64(), two["threads"].as_u64()),
         (Some(1), Some(2))
@@ -211,6 +212,8 @@ fn bench_threads_run_the_coloured_sweep_with_the_same_result() {
         assert_eq!(one[key], two[key], "{key}: {one} vs {two}");
     }
     let serial = bench_json(&[
+        "--method",
+        "gauss-seidel",
         "--threads",
         "2",
         "--sweep",
@@ -220,7 +223,11 @@ fn bench_threads_run_the_coloured_sweep_with_the_same_result() {
     ]);
     assert_eq!(serial["sweep"], "serial");
     assert!(serial["max_iterations"].as_u64().unwrap() <= 7, "{serial}");
-    assert_eq!(bench_json(&[])["sweep"], "serial");
+    assert_eq!(bench_json(&[])["sweep"], "none", "Newton is the default");
+    assert_eq!(
+        bench_json(&["--method", "gauss-seidel"])["sweep"],
+        "serial"
+    );
 }
 
 #[test]

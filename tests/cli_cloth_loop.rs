@@ -83,18 +83,11 @@ impl Drop for TempDir {
     }
 }
 
-/// A case of `modelgap::cloth::hidden` with its cloth held by clips: of the top row only
-/// the even columns stay pinned, as in `examples/make_cloth_demo_data.rs`.
 fn case(name: &str) -> HiddenCase {
-    let mut case = cases(GRID, GRID)
+    cases(GRID, GRID)
         .into_iter()
         .find(|c| c.name == name)
-        .expect("a cloth hidden-effect case of that name");
-    let nx = case.scene.cloth.nx as u32;
-    let clip = |v: u32| v >= nx || v % 2 == 0;
-    case.scene.cloth.pinned.retain(|&v| clip(v));
-    case.scene.pin_paths.retain(|(v, _)| clip(*v));
-    case
+        .expect("a cloth hidden-effect case of that name")
 }
 
 /// Writes the nominal scene of a case and its marker recording (CSV) into `dir`; returns

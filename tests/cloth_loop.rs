@@ -11,10 +11,16 @@
 
 use std::time::Instant;
 
+use modelgap::cloth::MarkerRecording;
 use modelgap::cloth::hidden::{HiddenCase, RecordingOptions, cases, record};
-use modelgap::cloth::model::ClothModel;
-use modelgap::cloth::scenes::Scene;
-use modelgap::{CompareOptions, ExplainOptions, Explanation, Model as _, Verdict, compare, explain};
+use modelgap::cloth::model::{
+    ClothModel, PredictSettings, markers_to_recording, recording_to_markers, simulate_markers,
+};
+use modelgap::cloth::scenes::{self, Scene};
+use modelgap::noise::Gaussian;
+use modelgap::{
+    CompareOptions, ExplainOptions, Explanation, Model as _, Verdict, compare, explain,
+};
 
 fn case(n: usize, name: &str) -> HiddenCase {
     cases(n, n)
@@ -56,9 +62,16 @@ fn assert_found(n: usize, name: &str) {
     println!("{story}");
     assert_eq!(ex.verdict, Verdict::EffectFound, "{name}:\n{story}");
     let h = &c.hidden[0];
+    // Ranked first as itself or as an exactly equivalent statement (a
+    // hanging cloth's stretch depends on compliance × mass only).
     let first = &ex.ranked[0];
-    assert_eq!(first.candidate.id, h.id, "{name}: ranked first\n{story}");
-    for (p, truth) in first.params.iter().zip(&h.values) {
+    assert!(
+        first.candidate.id == h.id || first.equivalent.contains(&h.id),
+        "{name}: ranked first is {}\n{story}",
+        first.candidate.id
+    );
+    let fitted = ex.ranked.iter().find(|r| r.candidate.id == h.id).unwrap();
+    for (p, truth) in fitted.params.iter().zip(&h.values) {
         assert!(
             (p.value - truth).abs() <= 0.15 * truth.abs(),
             "{name}: {} = {} vs true {truth}\n{story}",
@@ -85,8 +98,12 @@ fn assert_found(n: usize, name: &str) {
     };
     let before = compare(&model, &rec, &opts).unwrap();
     let after = compare(&reread, &rec, &opts).unwrap();
-    let total = |c: &modelgap::Comparison| c.outputs.iter().map(|o| o.stats.rms.powi(2)).sum::<f64>();
-    assert!(total(&after) < 0.8 * total(&before), "{name}: the error must fall");
+    let total =
+        |c: &modelgap::Comparison| c.outputs.iter().map(|o| o.stats.rms.powi(2)).sum::<f64>();
+    assert!(
+        total(&after) < 0.8 * total(&before),
+        "{name}: the error must fall"
+    );
 }
 
 #[test]
@@ -113,4 +130,80 @@ fn right_model_gets_nothing_missing() {
         "{}",
         modelgap::story::explanation_text(&ex, 5)
     );
+}
+
+/// A 30 × 30 swing with air drag: the size of the speed bar
+/// (explain under 60 s). Ignored: one simulation of it takes about 0.55 s
+/// (Newton, 200 steps, release) and explain runs several hundred, about
+/// 3 minutes on these machines (178 s measured, found C_d = 0.8001); run
+/// with `cargo test --release --test cloth_loop -- --ignored --nocapture`.
+#[test]
+#[ignore = "30 x 30 explain takes about 3 minutes in release (0.55 s per simulation)"]
+fn air_drag_is_found_on_a_30_by_30_cloth() {
+    assert_found(30, "drag");
+}
+
+/// The corner scene (8 × 8, 1 s): a cloth falling flat from one pinned
+/// corner snaps taut and branches. The true run takes half the step and a
+/// 100× tighter tolerance; the model, right but for its own step and
+/// tolerance, misses it by centimetres. compare blames it without its
+/// predictability band and not with it. (Against a truth at a quarter of
+/// the step the band still leaves windows on 16 of 63 coordinates.)
+#[test]
+fn predictability_band_keeps_a_right_model_of_a_snapping_cloth_blameless() {
+    let mut scene = scenes::corner().resized(8, 8).unwrap();
+    scene.duration = 1.0;
+    let ids: Vec<u32> = (0..64).step_by(3).collect();
+    let t: Vec<f64> = (0..=100).map(|k| 0.01 * f64::from(k)).collect();
+    let truth = PredictSettings {
+        step_divisor: 2,
+        stretch_tolerance: Some(1e-6),
+        ..PredictSettings::default()
+    };
+    let clean = simulate_markers(&scene, &ids, &t, &truth, None).unwrap();
+    let mut g = Gaussian::new(7);
+    let noisy = clean
+        .positions()
+        .iter()
+        .map(|f| f.iter().map(|p| p.map(|c| c + 1e-3 * g.sample())).collect())
+        .collect();
+    let markers = MarkerRecording::new(t, ids, noisy).unwrap();
+    let rec = markers_to_recording(&markers).unwrap();
+    assert_eq!(recording_to_markers(&rec).unwrap(), markers);
+    let model = ClothModel::new(scene);
+    let noise: std::collections::BTreeMap<String, f64> =
+        rec.names().iter().map(|n| (n.to_string(), 1e-3)).collect();
+    let failing = |predictability: bool| {
+        let opts = CompareOptions {
+            noise: noise.clone(),
+            predictability,
+            ..CompareOptions::default()
+        };
+        let c = compare(&model, &rec, &opts).unwrap();
+        c.outputs.iter().filter(|o| !o.windows.is_empty()).count()
+    };
+    let without = failing(false);
+    let with = failing(true);
+    println!("outputs with failure windows: {without} without the band, {with} with it");
+    assert!(without > 0, "the snapping scene must fail without the band");
+    assert_eq!(with, 0, "the right model is blamed despite the band");
+}
+
+/// Prints the time of one prediction of the swing scene (10 × 10 and
+/// 30 × 30, 2 s at 100 Hz): what each of explain's simulations costs.
+/// Timing only (nothing to assert); run with `--ignored --nocapture`.
+#[test]
+#[ignore = "timing printout for the report"]
+fn prediction_time_of_the_swing_scene() {
+    for n in [10, 30] {
+        let c = case(n, "nothing");
+        let rec = record(&c, &RecordingOptions::default()).unwrap();
+        let model = ClothModel::new(c.scene.clone());
+        let start = Instant::now();
+        model.predict(&rec).unwrap();
+        println!(
+            "{n} x {n}: one prediction {:.3} s",
+            start.elapsed().as_secs_f64()
+        );
+    }
 }

@@ -54,7 +54,7 @@ pub struct RunArgs {
     #[arg(long, value_name = "ID,ID,...|all", default_value = "all", value_parser = parse_markers)]
     markers: MarkerSelection,
 
-    /// Constraint solver [default: the scene's, gauss-seidel]
+    /// Constraint solver [default: the scene's, newton]
     #[arg(long, value_enum)]
     method: Option<MethodArg>,
 }
@@ -66,6 +66,8 @@ enum MethodArg {
     GaussSeidel,
     /// All constraints at once, sparse Cholesky (fast, exact)
     Newton,
+    /// The paper's acceleration: acyclic strips solved in linear time
+    Strips,
 }
 
 impl From<MethodArg> for Method {
@@ -73,6 +75,7 @@ impl From<MethodArg> for Method {
         match m {
             MethodArg::GaussSeidel => Method::GaussSeidel,
             MethodArg::Newton => Method::Newton,
+            MethodArg::Strips => Method::Strips,
         }
     }
 }
@@ -96,7 +99,7 @@ pub struct BenchArgs {
     #[arg(long, value_name = "T", value_parser = parse_positive)]
     duration: Option<f64>,
 
-    /// Constraint solver [default: the scene's, gauss-seidel]
+    /// Constraint solver [default: the scene's, newton]
     #[arg(long, value_enum)]
     method: Option<MethodArg>,
 
@@ -228,7 +231,8 @@ struct BenchReport {
     x_real_time: Option<f64>,
     threads: usize,
     method: &'static str,
-    /// `serial` or `coloured`: the Gauss–Seidel sweep order.
+    /// `serial` or `coloured`: the Gauss–Seidel sweep order (`none` for
+    /// the other methods).
     sweep: &'static str,
     stretch_tolerance: f64,
 }
@@ -287,9 +291,12 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         threads,
         method: match scene.params.method {
             Method::Newton => "newton",
+            Method::Strips => "strips",
             _ => "gauss-seidel",
         },
-        sweep: if scene.params.coloured_sweep {
+        sweep: if scene.params.method != Method::GaussSeidel {
+            "none"
+        } else if scene.params.coloured_sweep {
             "coloured"
         } else {
             "serial"
@@ -315,7 +322,7 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         s,
         "{}{}, tolerance {:e}, {} thread{}",
         report.method,
-        if scene.params.method == Method::Newton {
+        if scene.params.method != Method::GaussSeidel {
             String::new()
         } else {
             format!(" ({} sweep)", report.sweep)

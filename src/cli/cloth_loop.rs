@@ -556,6 +556,12 @@ pub fn fix_command(args: &FixArgs, scene_path: &Path) -> anyhow::Result<()> {
         ));
         return super::print(&out);
     }
+    if pick.is_none() && ex.verdict == Verdict::Partial {
+        out.push_str(
+            "\nnote: a partial explanation: the effect below lowers the error but does not \
+             reach the noise floor\n",
+        );
+    }
     let effects: Vec<Effect> = added.iter().map(RankedCandidate::effect).collect();
     let fixed = loaded
         .model

@@ -57,7 +57,8 @@ enum Command {
     #[command(subcommand)]
     Cloth(cloth::ClothCommand),
     /// Run the main demonstration: the measurement loop on a bundled motor recording with a
-    /// hidden effect, then the DC-motor paper's Table 7 diagnosis
+    /// hidden effect, then on a bundled cloth marker recording, then the DC-motor paper's
+    /// Table 7 diagnosis
     Demo(demo::DemoArgs),
 }
 

@@ -15,7 +15,8 @@ use super::BadInput;
 /// Which model to use and which of its values to change.
 #[derive(Debug, Args)]
 pub struct ModelArgs {
-    /// Model file (.toml) or built-in model name (dc-motor, buck-motor)
+    /// Model file (.toml) or built-in model name (dc-motor, buck-motor); compare, explain and
+    /// fix also take a cloth scene file (a .toml with a [cloth] table)
     #[arg(long, value_name = "MODEL")]
     pub model: String,
 

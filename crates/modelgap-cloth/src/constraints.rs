@@ -67,8 +67,8 @@ impl DistanceConstraints {
     #[must_use]
     pub fn max_error(&self, positions: &[Vector3<f64>], mu: &[f64], inv_h2: f64) -> f64 {
         let mut worst = 0.0_f64;
-        for i in 0..self.len() {
-            let e = self.error(i, positions, mu[i], inv_h2).abs();
+        for (i, &m) in mu.iter().enumerate().take(self.len()) {
+            let e = self.error(i, positions, m, inv_h2).abs();
             if e.is_nan() {
                 return f64::NAN;
             }

@@ -6,7 +6,8 @@
 //! the step so that every constraint holds at its end, within a relative
 //! stretch tolerance (0.01 % by default). Gauss–Seidel over the constraints is
 //! the paper's any-time iteration; a global Newton solve with a sparse
-//! Cholesky factor (kept across iterations and steps) is the fast exact one.
+//! `LDLᵀ` factor (kept across iterations and steps) is the fast exact one,
+//! and the default.
 //! Contacts with static colliders and Coulomb friction are resolved inside the
 //! same loop.
 //!
@@ -30,11 +31,15 @@
 //! ([`DistanceConstraints`]), [`mesh`] ([`GridCloth`], OBJ meshes, the
 //! vertex numbering), [`solver`] ([`SolverParams`], [`StepReport`], the
 //! Gauss–Seidel sweep), [`colouring`] (constraint colours, the coloured
-//! parallel sweep), [`newton`] (the global solve), [`contact`]
+//! parallel sweep), [`strips`] (acyclic strips solved in linear time, the
+//! paper's acceleration), [`newton`] (the global solve), [`contact`]
 //! ([`Collider`]), [`world`] ([`ClothWorld`]), [`kinematic`] ([`PinPath`]:
 //! pins that follow a path), [`markers`] ([`MarkerRecording`], marker CSV and
 //! MCAP files), [`scenes`] (the reference scenes), [`trajectory`] (running a
-//! scene, its recorded frames and Foxglove MCAP), [`error`].
+//! scene, its recorded frames and Foxglove MCAP), [`forces`] (drag, wind,
+//! damping, bending: [`ClothForces`]; a scene's [`ClothEffects`]), [`model`]
+//! ([`ClothModel`]: a scene as the measurement loop's model), [`hidden`]
+//! (recordings with a hidden effect), [`error`].
 
 pub mod colouring;
 pub mod constraints;
@@ -51,6 +56,7 @@ pub mod particles;
 pub mod report;
 pub mod scenes;
 pub mod solver;
+pub mod strips;
 pub mod trajectory;
 pub mod world;
 
@@ -60,8 +66,8 @@ pub use error::{ClothError, Result};
 pub use forces::{ClothEffects, ClothForces, PointMass};
 pub use kinematic::{KinematicPin, PinPath};
 pub use markers::MarkerRecording;
-pub use model::{ClothModel, PredictSettings};
 pub use mesh::{BuildMesh, ClothMesh, GridCloth, GridEdges};
+pub use model::{ClothModel, PredictSettings};
 pub use particles::{ParticleId, ParticleSet};
 pub use scenes::Scene;
 pub use solver::{Method, SolverParams, StepReport};

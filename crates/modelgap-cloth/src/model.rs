@@ -28,7 +28,7 @@
 //! | id | name | parameters |
 //! |---|---|---|
 //! | `air-drag` | aerodynamic drag on the cloth's triangles | `drag_coefficient` (1) |
-//! | `wind` | a constant wind (drag on the velocity relative to the air) | [`drag_coefficient`], `wind_x`, `wind_y`, `wind_z` (m/s) |
+//! | `wind` | a constant wind (drag on the velocity relative to the air) | (`drag_coefficient`), `wind_x`, `wind_y`, `wind_z` (m/s) |
 //! | `damping` | velocity damping −c m v | `damping` (1/s) |
 //! | `bending` | bending stiffness (springs on the grid's bend pairs) | `bend_stiffness` (N/m) |
 //! | `compliance` | stretch compliance (the cloth is not quite inextensible) | `compliance` (m/N) |
@@ -91,7 +91,7 @@ pub const SPREAD_PERTURBATION: f64 = 1e-6;
 
 /// Half-width of the running maximum that turns the spread into an envelope
 /// (samples): two runs that cross each other are not in agreement there.
-const SPREAD_ENVELOPE: usize = 5;
+pub const SPREAD_ENVELOPE: usize = 10;
 
 /// Largest damping rate × step of the `damping` candidate (dimensionless).
 const MAX_DAMPING_STEP: f64 = 0.2;
@@ -789,22 +789,29 @@ impl Model for ClothModel {
     }
 
     /// The spread of the scene's prediction: [`SPREAD_FACTOR`] times the
-    /// larger of its distance to a run at half the step and to a run whose
-    /// dynamic vertices start displaced by [`SPREAD_PERTURBATION`], per
-    /// marker coordinate, as an envelope over ±5 samples.
+    /// largest distance from it of three runs — at half the step, with every
+    /// dynamic vertex displaced at the start by [`SPREAD_PERTURBATION`]
+    /// (Gaussian), and both — per marker coordinate, as an envelope over
+    /// ±[`SPREAD_ENVELOPE`] samples. Costs four simulations (two at half the step).
     fn prediction_spread(&self, rec: &Recording) -> modelgap_core::Result<Option<Prediction>> {
         let nominal = self.predict(rec)?;
+        let divisor = self.settings.step_divisor.max(1);
         let half = PredictSettings {
-            step_divisor: 2 * self.settings.step_divisor.max(1),
+            step_divisor: 2 * divisor,
             ..self.settings.clone()
         };
         let perturbed = PredictSettings {
             perturbation: SPREAD_PERTURBATION,
             ..self.settings.clone()
         };
+        let half_perturbed = PredictSettings {
+            perturbation: SPREAD_PERTURBATION,
+            seed: self.settings.seed.wrapping_add(1),
+            ..half.clone()
+        };
         let mut largest: Vec<Vec<f64>> =
             nominal.values.iter().map(|v| vec![0.0; v.len()]).collect();
-        for settings in [half, perturbed] {
+        for settings in [half, perturbed, half_perturbed] {
             let other = self
                 .predict_settings(rec, &[], &settings)
                 .map_err(|e| model_error(&[], &e))?;
@@ -827,5 +834,151 @@ impl Model for ClothModel {
                 .collect(),
         };
         Ok(Some(spread))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenes;
+
+    const EFFECTS: &str = r#"
+name = "fx"
+duration = 0.5
+dt = 0.01
+[cloth]
+nx = 4
+nz = 3
+size = 0.3
+pins = [0]
+compliance = 0.002
+bend_stiffness = 0.5
+damping = 0.25
+[air]
+drag_coefficient = 1.1
+wind = [1.0, 0.0, -0.5]
+[[point_masses]]
+vertex = 11
+mass = 0.004
+[[colliders]]
+shape = "ball"
+center = [0.1, -0.4, 0.1]
+radius = 0.1
+friction = 0.3
+"#;
+
+    #[test]
+    fn scene_effect_fields_round_trip_through_the_file() {
+        let scene = Scene::from_toml(EFFECTS, "fx.toml").unwrap();
+        let fx = &scene.effects;
+        assert_eq!(fx.forces.drag_coefficient, 1.1);
+        assert_eq!(fx.forces.wind, Vector3::new(1.0, 0.0, -0.5));
+        assert_eq!((fx.forces.damping, fx.forces.bend_stiffness), (0.25, 0.5));
+        assert_eq!(fx.compliance, 0.002);
+        assert_eq!(
+            fx.point_masses,
+            vec![PointMass {
+                vertex: 11,
+                mass: 0.004
+            }]
+        );
+        let text = scene.to_toml().unwrap();
+        let back = Scene::from_toml(&text, "back.toml").unwrap();
+        assert_eq!(back.effects, scene.effects);
+        assert_eq!(back.to_toml().unwrap(), text);
+    }
+
+    #[test]
+    fn bad_effect_fields_are_named() {
+        let with = |extra: &str| {
+            let text = format!(
+                "name = 'x'\nduration = 1.0\ndt = 0.01\n[cloth]\nnx = 2\nnz = 2\nsize = 1.0\n{extra}"
+            );
+            Scene::from_toml(&text, "x").unwrap_err().to_string()
+        };
+        let e = with("[air]\ndrag_coefficient = -1.0\n");
+        assert!(e.contains("air.drag_coefficient"), "{e}");
+        let e = with("[[point_masses]]\nvertex = 4\nmass = 0.1\n");
+        assert!(e.contains("point_masses[0].vertex"), "{e}");
+        let e = with("compliance = -0.1\n");
+        assert!(e.contains("cloth.compliance"), "{e}");
+    }
+
+    #[test]
+    fn markers_and_recordings_convert_both_ways() {
+        let markers = MarkerRecording::new(
+            vec![0.0, 0.1],
+            vec![7, 2],
+            vec![
+                vec![[0.0, 1.0, 2.0], [3.0, 4.0, 5.0]],
+                vec![[0.5, 1.5, 2.5], [3.5, 4.5, 5.5]],
+            ],
+        )
+        .unwrap();
+        let rec = markers_to_recording(&markers).unwrap();
+        assert_eq!(rec.names()[..3], ["m7.x", "m7.y", "m7.z"]);
+        assert_eq!(rec.values("m2.z").unwrap(), &[5.0, 5.5]);
+        assert_eq!(recording_to_markers(&rec).unwrap(), markers);
+        assert_eq!(parse_marker_signal("m12.y"), Some((12, 1)));
+        assert_eq!(parse_marker_signal("m.x"), None);
+        assert_eq!(parse_marker_signal("m1.w"), None);
+        assert_eq!(parse_marker_signal("omega"), None);
+    }
+
+    #[test]
+    fn fix_writes_the_fitted_terms_into_the_scene_file() {
+        let model = ClothModel::new(scenes::corner().resized(4, 4).unwrap());
+        let menu = model.candidates();
+        let pick = |id: &str| menu.iter().find(|c| c.id == id).unwrap().clone();
+        let effects = vec![
+            Effect {
+                candidate: pick("air-drag"),
+                values: vec![0.7],
+            },
+            Effect {
+                candidate: pick("point-mass"),
+                values: vec![2.6, 3.0, 0.002],
+            },
+        ];
+        let fixed = model.with_effects(&effects).unwrap();
+        let text = fixed.to_file_text().unwrap();
+        assert!(
+            text.starts_with("# added by explain: aerodynamic drag"),
+            "{text}"
+        );
+        let back = Scene::from_toml(&text, "fixed.toml").unwrap();
+        assert_eq!(back.effects.forces.drag_coefficient, 0.7);
+        assert_eq!(
+            back.effects.point_masses,
+            vec![PointMass {
+                vertex: 15,
+                mass: 0.002
+            }]
+        );
+        // Out of bounds is an error naming the parameter.
+        let e = model
+            .with_effects(&[Effect {
+                candidate: pick("air-drag"),
+                values: vec![-1.0],
+            }])
+            .err()
+            .unwrap();
+        assert!(e.to_string().contains("drag_coefficient"), "{e}");
+    }
+
+    #[test]
+    fn samples_between_steps_are_interpolated() {
+        let scene = scenes::corner().resized(3, 3).unwrap();
+        let settings = PredictSettings::default();
+        let at = |t: Vec<f64>| simulate_markers(&scene, &[8], &t, &settings, None).unwrap();
+        let steps = at(vec![0.0, 0.01, 0.02]);
+        let mid = at(vec![0.015]);
+        let y = |m: &MarkerRecording, k: usize| m.positions()[k][0][1];
+        approx::assert_relative_eq!(
+            y(&mid, 0),
+            0.5 * (y(&steps, 1) + y(&steps, 2)),
+            epsilon = 1e-12
+        );
+        assert!(y(&steps, 2) < y(&steps, 0));
     }
 }

@@ -103,9 +103,19 @@
 //! = 0.3; up to [`MAX_INCREASES`] non-monotone full steps), the 30 × 30
 //! reference scenes (3 s, h = 0.01) hold 1e-4 at every step: `corner`
 //! 3.1 iterations and 1.1 factorisations per step, `two-corners` 3.4 and
-//! 0.44, `drape` 2.2 and 2.0. A factorisation of the 4434 × 4434 KKT matrix
-//! costs about 3 ms and a solve 0.4 ms, so factorisations dominate; see
-//! `examples/scene_timing.rs` and `modelgap cloth bench`.
+//! 0.44, `drape` 3.7 and 2.5. A factorisation of the 4434 × 4434 KKT matrix
+//! costs about 3.5 ms and a solve 0.1–0.3 ms, so factorisations dominate
+//! (about 1.3 s CPU for `corner`, 0.8 s for `two-corners`, 3 s for `drape`,
+//! one thread); see `examples/scene_timing.rs` and `modelgap cloth bench`.
+//!
+//! Tried and dropped, measured on the same scenes: GMRES preconditioned by
+//! the stale factor instead of refactoring (a preconditioned iteration costs
+//! a tenth of a factorisation, and it needed too many: 2× slower);
+//! eliminating the impulses into a positions-only SPD system `K + Jᵀ W J`
+//! (factorisation 1.5× cheaper, but the stale factor no longer serves, since
+//! `W` is huge and follows the directions: no faster overall); a simplicial
+//! instead of the supernodal factorisation (3× slower); refactor ratios
+//! from 0.3 to 0.99 (no better).
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
@@ -211,6 +221,9 @@ struct State {
     merit: f64,
     max_stretch: f64,
     max_residual: f64,
+    /// Largest momentum residual of a particle in contact (m): friction
+    /// acts only through it, so a step has not converged until it is small.
+    contact_residual: f64,
     penetration: f64,
 }
 
@@ -575,7 +588,10 @@ impl NewtonSolver {
         let mut increases_left = MAX_INCREASES;
         loop {
             out.max_stretch = self.cur.max_stretch;
-            if self.cur.max_stretch <= tol && self.cur.penetration <= params.contact_tolerance {
+            if self.cur.max_stretch <= tol
+                && self.cur.penetration <= params.contact_tolerance
+                && self.cur.contact_residual <= tol * self.mean_rest
+            {
                 out.converged = true;
                 break;
             }
@@ -698,7 +714,11 @@ impl NewtonSolver {
             if trial.merit < (1.0 - 1e-4 * alpha) * cur.merit {
                 return true;
             }
-            if alpha == 1.0 && allow_increase && trial.merit.is_finite() && trial.merit < WATCHDOG * cur.merit {
+            if alpha == 1.0
+                && allow_increase
+                && trial.merit.is_finite()
+                && trial.merit < WATCHDOG * cur.merit
+            {
                 return true;
             }
             if !fresh {
@@ -852,7 +872,7 @@ fn evaluate(s: &mut State, input: &StepInput<'_>, mean_rest: f64) {
             let ct = &mut s.contact[i];
             if !ct.active {
                 for (ci, col) in input.colliders.iter().enumerate() {
-                    let (phi, n) = col.signed_distance(&s.x[i]);
+                    let (phi, n) = col.swept_distance(&input.start[i], &s.x[i]);
                     if phi < 0.0 {
                         *ct = Contact {
                             normal: n,
@@ -867,7 +887,7 @@ fn evaluate(s: &mut State, input: &StepInput<'_>, mean_rest: f64) {
             }
             if ct.active {
                 let col = &input.colliders[ct.collider as usize];
-                let (phi, n) = col.signed_distance(&s.x[i]);
+                let (phi, n) = col.swept_distance(&input.start[i], &s.x[i]);
                 ct.normal = n;
                 if phi != 0.0 {
                     s.x[i] -= phi * n;
@@ -904,6 +924,7 @@ fn evaluate(s: &mut State, input: &StepInput<'_>, mean_rest: f64) {
         }
     }
     let mut max_residual = 0.0_f64;
+    let mut contact_residual = 0.0_f64;
     let mut penetration = 0.0_f64;
     #[allow(clippy::needless_range_loop)] // columns indexed together
     for i in 0..s.x.len() {
@@ -930,11 +951,14 @@ fn evaluate(s: &mut State, input: &StepInput<'_>, mean_rest: f64) {
         s.f[i] = f - s.r[i];
         let e = s.f[i].norm() * k[i];
         max_residual = max_residual.max(e);
+        if s.contact[i].active {
+            contact_residual = contact_residual.max(e);
+        }
         let rel = e / mean_rest;
         merit += rel * rel;
         if !s.contact[i].active {
             for col in input.colliders {
-                penetration = penetration.max(-col.signed_distance(&s.x[i]).0);
+                penetration = penetration.max(-col.swept_distance(&input.start[i], &s.x[i]).0);
             }
         }
     }
@@ -945,6 +969,7 @@ fn evaluate(s: &mut State, input: &StepInput<'_>, mean_rest: f64) {
     };
     s.max_stretch = max_stretch;
     s.max_residual = max_residual;
+    s.contact_residual = contact_residual;
     s.penetration = penetration;
 }
 
@@ -989,4 +1014,3 @@ mod tests {
         assert!(mu.iter().all(|&m| m > 0.0), "{mu:?}");
     }
 }
-

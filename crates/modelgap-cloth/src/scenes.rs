@@ -681,7 +681,9 @@ impl Scene {
                     .t()
                     .iter()
                     .zip(path.points())
-                    .map(|(t, p)| format!("[{}, {}, {}, {}]", num(*t), num(p.x), num(p.y), num(p.z)))
+                    .map(|(t, p)| {
+                        format!("[{}, {}, {}, {}]", num(*t), num(p.x), num(p.y), num(p.z))
+                    })
                     .collect();
                 let _ = writeln!(out, "path = [{}]", rows.join(", "));
             }

@@ -28,8 +28,10 @@
 //! constraint manifold.
 //!
 //! [`Method::GaussSeidel`] sweeps the constraints one at a time and can be
-//! stopped after any sweep with a finite state. [`Method::Newton`] solves all
-//! constraints at once (see [`crate::newton`]).
+//! stopped after any sweep with a finite state. [`Method::Strips`] sweeps
+//! acyclic strips of constraints, each solved exactly in linear time (see
+//! [`crate::strips`]). [`Method::Newton`] solves all constraints at once (see
+//! [`crate::newton`]).
 
 use nalgebra::Vector3;
 
@@ -40,16 +42,26 @@ use crate::constraints::DistanceConstraints;
 #[non_exhaustive]
 pub enum Method {
     /// The paper's iteration: one constraint at a time, in order, until all
-    /// hold. Cheap per iteration, any-time, slow to converge on large meshes.
-    #[default]
+    /// hold. Cheap per iteration, any-time (stop it after any sweep), but it
+    /// needs thousands of sweeps per step to hold 1e-4 on a 30 × 30 cloth.
     GaussSeidel,
     /// All constraints at once: Newton's method on the end-of-step
     /// positions and impulses together, with the geometric stiffness of
     /// tensioned links, and a sparse `LDLᵀ` factorisation whose ordering and
     /// symbolic analysis are computed once per topology and whose numeric
     /// factor is reused across iterations and steps while the error keeps
-    /// shrinking fast (see [`crate::newton`]).
+    /// shrinking fast (see [`crate::newton`]). The default: it holds 1e-4
+    /// on every reference scene at every step.
+    #[default]
     Newton,
+    /// The paper's acceleration: the constraints split into acyclic strips
+    /// (chains; a grid's rows and columns), each strip solved directly along
+    /// the previewed directions by the linear-time tridiagonal method, one
+    /// Gauss–Newton step per strip per sweep, Gauss–Seidel between the
+    /// strips (see [`crate::strips`]). Any-time like [`Method::GaussSeidel`]
+    /// (stop it after any sweep), with far fewer sweeps.
+    /// [`SolverParams::coloured_sweep`] does not apply.
+    Strips,
 }
 
 /// Parameters of the cloth solver.
@@ -58,10 +70,10 @@ pub struct SolverParams {
     /// Allowed relative stretch (or compression) of every constraint at the
     /// end of a converged step (dimensionless); default 1e-4 (0.01 %, the paper's value).
     pub stretch_tolerance: f64,
-    /// Iteration limit per step: Gauss–Seidel sweeps or Newton solves;
+    /// Iteration limit per step: Gauss–Seidel or strip sweeps, or Newton solves;
     /// default 1000. Running out is reported, not an error.
     pub max_iterations: usize,
-    /// The constraint method; default [`Method::GaussSeidel`].
+    /// The constraint method; default [`Method::Newton`].
     pub method: Method,
     /// Gauss–Seidel only: sweep the constraints colour by colour (groups
     /// that share no dynamic particle, see [`crate::colouring`]) instead of
@@ -92,7 +104,7 @@ impl Default for SolverParams {
         Self {
             stretch_tolerance: 1e-4,
             max_iterations: 1000,
-            method: Method::GaussSeidel,
+            method: Method::Newton,
             coloured_sweep: false,
             gravity: Vector3::new(0.0, -9.81, 0.0),
             velocity_iterations: 0,
@@ -106,7 +118,7 @@ impl Default for SolverParams {
 /// What one step did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StepReport {
-    /// Iterations used (Gauss–Seidel sweeps or Newton solves).
+    /// Iterations used (Gauss–Seidel or strip sweeps, or Newton solves).
     pub iterations: usize,
     /// Largest relative stretch or compression of any constraint at the end of the step.
     pub max_stretch: f64,

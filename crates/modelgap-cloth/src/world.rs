@@ -13,6 +13,7 @@ use crate::mesh::{BuildMesh, ClothMesh};
 use crate::newton::{NewtonSolver, StepInput};
 use crate::particles::{ParticleId, ParticleSet};
 use crate::solver::{self, Method, SolverParams, StepReport};
+use crate::strips::StripSweep;
 
 /// The id of a cloth in a [`ClothWorld`], handed out by [`ClothWorld::add_cloth`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -38,6 +39,9 @@ struct SolverWorkspace {
     /// The coloured sweep (colouring and scratch), built on the first step
     /// with [`SolverParams::coloured_sweep`], dropped on a topology change.
     coloured: Option<ColouredSweep>,
+    /// The strip sweep (strips and scratch), built on the first step with
+    /// [`Method::Strips`], dropped on a topology change.
+    strips: Option<StripSweep>,
 }
 
 /// All cloths and colliders of a simulation, stepped together.
@@ -327,6 +331,7 @@ impl ClothWorld {
     fn topology_changed(&mut self) {
         self.workspace.newton = None;
         self.workspace.coloured = None;
+        self.workspace.strips = None;
         self.workspace.mu.clear();
         self.workspace.mu.resize(self.constraints.len(), 0.0);
         self.workspace.last_dt = None;
@@ -355,10 +360,10 @@ impl ClothWorld {
         ws.contacts.clear();
         ws.contacts.resize(n, ContactState::default());
         let forces = &self.external_forces;
-        for i in 0..n {
+        for (i, f) in forces.iter().enumerate().take(n) {
             let x = ps.positions[i];
             ws.pred.push(if ps.inv_mass[i] > 0.0 {
-                let a = g + forces[i] * ps.inv_mass[i];
+                let a = g + f * ps.inv_mass[i];
                 x + h * ps.velocities[i] + 0.5 * h * h * a
             } else {
                 x
@@ -424,7 +429,17 @@ impl ClothWorld {
             // The coloured sweep, its colouring rebuilt when a particle
             // turned static or dynamic since it was made.
             let mut coloured = None;
-            if self.params.coloured_sweep {
+            let mut strips = None;
+            if self.params.method == Method::Strips {
+                let fits = ws
+                    .strips
+                    .as_ref()
+                    .is_some_and(|s| s.fits(cs, &ps.inv_mass));
+                if !fits {
+                    ws.strips = Some(StripSweep::new(cs, &ps.inv_mass, &ps.positions)?);
+                }
+                strips = ws.strips.as_mut();
+            } else if self.params.coloured_sweep {
                 let fits = ws
                     .coloured
                     .as_ref()
@@ -455,9 +470,10 @@ impl ClothWorld {
                     break;
                 }
                 let (k, pred, mu) = (&ps.inv_mass, &mut ws.pred, &mut ws.mu);
-                match coloured.as_deref_mut() {
-                    Some(sweep) => sweep.sweep(cs, k, pred, mu, inv_h2),
-                    None => solver::gauss_seidel_sweep(cs, k, pred, mu, inv_h2),
+                match (strips.as_deref_mut(), coloured.as_deref_mut()) {
+                    (Some(sweep), _) => sweep.sweep(cs, k, pred, mu, inv_h2),
+                    (None, Some(sweep)) => sweep.sweep(cs, k, pred, mu, inv_h2),
+                    (None, None) => solver::gauss_seidel_sweep(cs, k, pred, mu, inv_h2),
                 }
                 report.iterations += 1;
             }
@@ -465,9 +481,9 @@ impl ClothWorld {
         report.max_penetration = contact::max_penetration(&self.colliders, &ps.inv_mass, &ws.pred);
         // Commit: positions from the preview, velocities of a particle that
         // received its impulses at the start of the step under constant force.
-        for i in 0..n {
+        for (i, f) in forces.iter().enumerate().take(n) {
             if ps.inv_mass[i] > 0.0 {
-                let a = g + forces[i] * ps.inv_mass[i];
+                let a = g + f * ps.inv_mass[i];
                 ps.velocities[i] = (ws.pred[i] - ps.positions[i]) / h + 0.5 * h * a;
                 ps.positions[i] = ws.pred[i];
             } else {

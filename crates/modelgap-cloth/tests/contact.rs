@@ -14,9 +14,12 @@ use nalgebra::{Isometry3, Vector3};
 
 const G: f64 = 9.81;
 
-fn gauss_seidel() -> SolverParams {
+/// Both solvers must handle contacts the same way.
+const METHODS: [Method; 2] = [Method::GaussSeidel, Method::Newton];
+
+fn solver(method: Method) -> SolverParams {
     SolverParams {
-        method: Method::GaussSeidel,
+        method,
         max_iterations: 500,
         ..SolverParams::default()
     }
@@ -210,8 +213,8 @@ fn swept_distance_from_the_surface() {
 
 /// A 3 x 3 cloth (5 cm spacing) at rest `gap` m above the top of the
 /// collider's surface at the origin, moving down at `speed` m/s.
-fn falling_cloth(collider: Collider, top: f64, gap: f64, speed: f64) -> ClothWorld {
-    let mut world = ClothWorld::new(gauss_seidel());
+fn falling_cloth(collider: Collider, top: f64, gap: f64, speed: f64, method: Method) -> ClothWorld {
+    let mut world = ClothWorld::new(solver(method));
     let origin = Isometry3::translation(-0.05, top + gap, -0.05);
     let cloth = world
         .add_cloth(GridCloth::new(3, 3, 0.05).world_from_local(origin))
@@ -237,9 +240,12 @@ fn fast_cloth_does_not_tunnel_through_thin_colliders() {
         (Collider::trimesh(cube_v, cube_t).unwrap(), thin / 2.0),
         (floor_mesh(0.0, 0.5), 0.0),
     ];
-    for (collider, top) in cases {
-        let name = collider.shape_name();
-        let mut world = falling_cloth(collider.clone(), top, 0.1, 40.0);
+    for ((collider, top), method) in cases
+        .into_iter()
+        .flat_map(|c| METHODS.map(|m| (c.clone(), m)))
+    {
+        let name = format!("{} ({method:?})", collider.shape_name());
+        let mut world = falling_cloth(collider.clone(), top, 0.1, 40.0, method);
         let mut touched = 0;
         for step in 0..20 {
             let r = world.step(0.01).unwrap();
@@ -284,10 +290,13 @@ fn cloth_rests_on_every_shape() {
         ),
         (floor_mesh(0.0, 0.5), 0.0),
     ];
-    for (collider, top) in cases {
-        let name = collider.shape_name();
+    for ((collider, top), method) in cases
+        .into_iter()
+        .flat_map(|c| METHODS.map(|m| (c.clone(), m)))
+    {
+        let name = format!("{} ({method:?})", collider.shape_name());
         let collider = collider.friction(0.5);
-        let mut world = falling_cloth(collider.clone(), top, 0.05, 0.0);
+        let mut world = falling_cloth(collider.clone(), top, 0.05, 0.0, method);
         let mut touched = 0;
         for step in 0..60 {
             let r = world.step(0.01).unwrap();
@@ -313,12 +322,12 @@ fn cloth_rests_on_every_shape() {
 /// A 3 x 3 cloth (2 cm spacing) lying on a plane inclined by `theta` rad with
 /// friction `mu`, left alone for `seconds`; returns the displacement of its
 /// centre down the slope (m) and its velocity along the slope (m/s).
-fn slide_on_incline(theta: f64, mu: f64, seconds: f64) -> (f64, f64) {
+fn slide_on_incline(theta: f64, mu: f64, seconds: f64, method: Method) -> (f64, f64) {
     // The plane through the origin rises towards −x: normal (sin θ, cos θ, 0),
     // downhill (cos θ, −sin θ, 0). The grid's local x runs downhill.
     let normal = Vector3::new(theta.sin(), theta.cos(), 0.0);
     let downhill = Vector3::new(theta.cos(), -theta.sin(), 0.0);
-    let mut world = ClothWorld::new(gauss_seidel());
+    let mut world = ClothWorld::new(solver(method));
     let pose = Isometry3::new(Vector3::zeros(), Vector3::new(0.0, 0.0, -theta));
     let cloth = world
         .add_cloth(GridCloth::new(3, 3, 0.02).world_from_local(pose))
@@ -342,9 +351,11 @@ fn slide_on_incline(theta: f64, mu: f64, seconds: f64) -> (f64, f64) {
 #[test]
 fn cloth_sticks_when_friction_exceeds_the_slope() {
     let theta = 20_f64.to_radians(); // tan θ = 0.364
-    let (moved, v) = slide_on_incline(theta, 0.5, 1.0);
-    assert!(moved.abs() < 1e-3, "moved {moved} m in 1 s");
-    assert!(v.abs() < 1e-3, "still moving at {v} m/s");
+    for method in METHODS {
+        let (moved, v) = slide_on_incline(theta, 0.5, 1.0, method);
+        assert!(moved.abs() < 1e-3, "{method:?}: moved {moved} m in 1 s");
+        assert!(v.abs() < 1e-3, "{method:?}: still moving at {v} m/s");
+    }
 }
 
 #[test]
@@ -353,13 +364,15 @@ fn cloth_slides_with_coulomb_acceleration_below_the_slope() {
     let mu = 0.2;
     let seconds = 1.0;
     let a = G * (theta.sin() - mu * theta.cos()); // 1.51 m/s²
-    let (moved, v) = slide_on_incline(theta, mu, seconds);
-    // Within 10 % of uniform acceleration from rest.
-    assert_relative_eq!(moved, 0.5 * a * seconds * seconds, max_relative = 0.1);
-    assert_relative_eq!(v, a * seconds, max_relative = 0.1);
-    // Frictionless: g sin θ.
-    let (moved, _) = slide_on_incline(theta, 0.0, seconds);
-    assert_relative_eq!(moved, 0.5 * G * theta.sin(), max_relative = 0.1);
+    for method in METHODS {
+        let (moved, v) = slide_on_incline(theta, mu, seconds, method);
+        // Within 10 % of uniform acceleration from rest.
+        assert_relative_eq!(moved, 0.5 * a * seconds * seconds, max_relative = 0.1);
+        assert_relative_eq!(v, a * seconds, max_relative = 0.1);
+        // Frictionless: g sin θ.
+        let (moved, _) = slide_on_incline(theta, 0.0, seconds, method);
+        assert_relative_eq!(moved, 0.5 * G * theta.sin(), max_relative = 0.1);
+    }
 }
 
 #[test]

@@ -75,13 +75,7 @@ pub fn write_error_mcap(m: &ErrorMcap<'_>, writer: impl Write + Seek) -> Result<
         "foxglove.FrameTransform",
         &schema("foxglove.FrameTransform"),
     )?;
-    let mut streams: Vec<(
-        &ClothComparison,
-        &[Vec<[f64; 3]>],
-        ChannelId,
-        ChannelId,
-        &str,
-    )> = Vec::new();
+    let mut streams: Vec<Stream<'_>> = Vec::new();
     let names: Vec<String> = m
         .before
         .markers
@@ -117,7 +111,13 @@ pub fn write_error_mcap(m: &ErrorMcap<'_>, writer: impl Write + Seek) -> Result<
             "modelgap.MarkerError",
             &number_object_schema("modelgap.MarkerError", &name_refs),
         )?;
-        streams.push((c, mesh, scene, error, label));
+        streams.push(Stream {
+            comparison: c,
+            mesh,
+            scene,
+            error,
+            label,
+        });
     }
     let markers = add_markers_channel(&mut out)?;
     let t0 = m.measured.t()[0];
@@ -130,7 +130,14 @@ pub fn write_error_mcap(m: &ErrorMcap<'_>, writer: impl Write + Seek) -> Result<
         .enumerate()
     {
         let t = t - t0;
-        for &(c, mesh, scene, error, label) in &streams {
+        for &Stream {
+            comparison: c,
+            mesh,
+            scene,
+            error,
+            label,
+        } in &streams
+        {
             let per_marker: Vec<f64> = c.markers.iter().map(|x| x.distance[k]).collect();
             let values = interpolate(&weights, &per_marker);
             let update = scene_update(m, t, &mesh[k][..n_vertices], &values, scale, frame, label);
@@ -147,6 +154,15 @@ pub fn write_error_mcap(m: &ErrorMcap<'_>, writer: impl Write + Seek) -> Result<
     }
     out.finish()?;
     Ok(())
+}
+
+/// One side of the comparison (the model as given, or with the effect) and its channels.
+struct Stream<'a> {
+    comparison: &'a ClothComparison,
+    mesh: &'a [Vec<[f64; 3]>],
+    scene: ChannelId,
+    error: ChannelId,
+    label: &'static str,
 }
 
 /// Writes [`write_error_mcap`] to a file (created or truncated), the path in every error.

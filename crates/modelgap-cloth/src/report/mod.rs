@@ -79,8 +79,11 @@ pub use map::{error_colour, error_map_svg};
 /// The shortest failure window, in sample periods (as the core comparison's default).
 const MIN_WINDOW_SAMPLES: f64 = 5.0;
 
-/// Markers and regions listed in text.
+/// Regions listed in text.
 const TOP_REGIONS: usize = 3;
+
+/// Up to this many markers, the text lists every marker's RMS.
+const PER_MARKER_LISTED: usize = 48;
 
 /// One marker (a mesh vertex) held against the model over the whole recording.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -457,14 +460,15 @@ fn region_text(r: &Region) -> String {
         ),
     };
     format!(
-        "{} (rows {}–{}, columns {}–{}{pins}): {} over {} markers",
+        "{} (rows {}–{}, columns {}–{}{pins}): {} over {} marker{}",
         r.name,
         r.rows[0],
         r.rows[1],
         r.cols[0],
         r.cols[1],
         mm(r.rms),
-        r.n_markers
+        r.n_markers,
+        if r.n_markers == 1 { "" } else { "s" }
     )
 }
 
@@ -526,6 +530,21 @@ pub fn comparison_text(c: &ClothComparison, top: usize) -> String {
         })
         .collect();
     let _ = writeln!(s, "  worst markers: {}", worst.join(", "));
+    if c.markers.len() <= PER_MARKER_LISTED {
+        let all: Vec<String> = c
+            .markers
+            .iter()
+            .map(|m| format!("m{} {}", m.id, format_number(m.rms * 1e3)))
+            .collect();
+        for (k, chunk) in all.chunks(8).enumerate() {
+            let head = if k == 0 {
+                "  per marker (RMS, mm):"
+            } else {
+                "                       "
+            };
+            let _ = writeln!(s, "{head} {}", chunk.join(", "));
+        }
+    }
     let _ = writeln!(s, "  worst regions (the grid cut in 3 × 3):");
     for r in c.regions.iter().take(TOP_REGIONS) {
         let _ = writeln!(s, "    {}", region_text(r));
