@@ -224,10 +224,7 @@ fn bench_threads_run_the_coloured_sweep_with_the_same_result() {
     assert_eq!(serial["sweep"], "serial");
     assert!(serial["max_iterations"].as_u64().unwrap() <= 7, "{serial}");
     assert_eq!(bench_json(&[])["sweep"], "none", "Newton is the default");
-    assert_eq!(
-        bench_json(&["--method", "gauss-seidel"])["sweep"],
-        "serial"
-    );
+    assert_eq!(bench_json(&["--method", "gauss-seidel"])["sweep"], "serial");
 }
 
 #[test]

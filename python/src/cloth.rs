@@ -530,6 +530,7 @@ impl PyCollider {
 fn method_name(m: Method) -> &'static str {
     match m {
         Method::Newton => "newton",
+        Method::Strips => "strips",
         _ => "gauss-seidel",
     }
 }
@@ -538,8 +539,9 @@ fn parse_method(s: &str) -> PyResult<Method> {
     match s {
         "gauss-seidel" | "gauss_seidel" => Ok(Method::GaussSeidel),
         "newton" => Ok(Method::Newton),
+        "strips" => Ok(Method::Strips),
         _ => Err(data_error(format!(
-            "method must be \"gauss-seidel\" or \"newton\", found \"{s}\""
+            "method must be \"newton\", \"gauss-seidel\" or \"strips\", found \"{s}\""
         ))),
     }
 }
@@ -549,8 +551,8 @@ type ParamsState = (String, f64, usize, [f64; 3], usize, bool, f64, f64);
 
 /// Parameters of the cloth solver (a value: change one with ``replace``).
 ///
-/// ``method`` is ``"gauss-seidel"`` (the paper's any-time iteration) or ``"newton"`` (a
-/// global solve); ``stretch_tolerance`` the allowed relative stretch (default 1e-4, 0.01 %);
+/// ``method`` is ``"newton"`` (a global solve, the default), ``"gauss-seidel"`` (the
+/// paper's any-time iteration) or ``"strips"`` (the paper's acyclic strips); ``stretch_tolerance`` the allowed relative stretch (default 1e-4, 0.01 %);
 /// ``max_iterations`` the limit per step (running out is reported, not raised);
 /// ``gravity`` in m/s²; ``velocity_iterations`` sweeps of the velocity part;
 /// ``warm_start`` reuses the last step's impulses; ``refactor_ratio`` (Newton) and
@@ -580,7 +582,7 @@ impl PySolverParams {
 #[pymethods]
 impl PySolverParams {
     #[new]
-    #[pyo3(signature = (*, method = "gauss-seidel", stretch_tolerance = 1e-4, max_iterations = 1000, gravity = None, velocity_iterations = 0, warm_start = true, refactor_ratio = 0.5, contact_tolerance = 1e-4))]
+    #[pyo3(signature = (*, method = "newton", stretch_tolerance = 1e-4, max_iterations = 1000, gravity = None, velocity_iterations = 0, warm_start = true, refactor_ratio = 0.3, contact_tolerance = 1e-4))]
     #[allow(clippy::too_many_arguments)] // keyword-only options of the Python API
     fn new(
         method: &str,
@@ -657,7 +659,7 @@ impl PySolverParams {
         Ok(d)
     }
 
-    /// ``"gauss-seidel"`` or ``"newton"``.
+    /// ``"newton"``, ``"gauss-seidel"`` or ``"strips"``.
     #[getter]
     fn method(&self) -> &'static str {
         method_name(self.inner.method)

@@ -93,7 +93,7 @@ def test_nothing_missing_for_a_right_cloth_model(model: ClothModel):
 
 
 def test_cloth_model_errors(model: ClothModel, tmp_path):
-    with pytest.raises(modelgap.DataError, match='method must be "gauss-seidel" or "newton"'):
+    with pytest.raises(modelgap.DataError, match='method must be "newton", "gauss-seidel" or "strips"'):
         ClothModel(model.scene, method="cg")
     with pytest.raises(modelgap.DataError, match="step_divisor must be at least 1"):
         ClothModel(model.scene, step_divisor=0)

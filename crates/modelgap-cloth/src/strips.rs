@@ -67,6 +67,17 @@
 //! `1e-12` of its diagonal entry, or a non-finite one (a straight row held at
 //! both ends, or rounding), is projected constraint by constraint, as in the
 //! serial sweep, for that sweep instead.
+//!
+//! # What it buys
+//!
+//! A strip sweep costs about 1.6 serial sweeps. Along a strip the coupling
+//! is solved exactly, across strips it is still Gauss–Seidel, so the gain
+//! depends on how the tension runs: a chain is solved in one sweep when
+//! straight, a few when swinging; a 12 × 12 cloth hanging from a corner
+//! needs about a third of the serial sweeps; a cloth held by two corners of
+//! one edge converges at every step where the serial sweep stalls (its top
+//! row, taut, is solved whole); on the 30 × 30 corner scene, whose tension
+//! runs diagonally across rows and columns, the gain is about 2.5× in sweeps.
 
 use nalgebra::Vector3;
 

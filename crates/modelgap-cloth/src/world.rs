@@ -136,10 +136,13 @@ impl ClothWorld {
                 value: compliance,
             });
         }
-        let entry = self.cloths.get(cloth.0 as usize).ok_or(ClothError::UnknownCloth {
-            id: cloth.0,
-            n_cloths: self.cloths.len(),
-        })?;
+        let entry = self
+            .cloths
+            .get(cloth.0 as usize)
+            .ok_or(ClothError::UnknownCloth {
+                id: cloth.0,
+                n_cloths: self.cloths.len(),
+            })?;
         self.constraints.compliance[entry.constraints.clone()].fill(compliance);
         Ok(())
     }
@@ -431,10 +434,7 @@ impl ClothWorld {
             let mut coloured = None;
             let mut strips = None;
             if self.params.method == Method::Strips {
-                let fits = ws
-                    .strips
-                    .as_ref()
-                    .is_some_and(|s| s.fits(cs, &ps.inv_mass));
+                let fits = ws.strips.as_ref().is_some_and(|s| s.fits(cs, &ps.inv_mass));
                 if !fits {
                     ws.strips = Some(StripSweep::new(cs, &ps.inv_mass, &ps.positions)?);
                 }

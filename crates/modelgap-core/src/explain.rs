@@ -409,7 +409,7 @@ fn fit_pair(
         first.params.iter().chain(&second.params).collect();
     let bounds: Vec<(f64, f64)> = params.iter().map(|p| (p.lower, p.upper)).collect();
     let scales: Vec<f64> = params.iter().map(|p| p.scale).collect();
-    let mut fit_opts = opts.fit.clone();
+    let mut fit_opts = fit_options(target.model, opts);
     fit_opts.name = format!("{} + {}", first.name, second.name);
     let report = fit(
         &problem,
@@ -528,7 +528,7 @@ fn fit_candidate(
     opts: &ExplainOptions,
 ) -> Fitted {
     let c = prepared(candidate, target.rec);
-    let mut fit_opts = opts.fit.clone();
+    let mut fit_opts = fit_options(target.model, opts);
     fit_opts.name = c.name.clone();
     let cancel = opts.cancel.as_deref();
     let bounds: Vec<(f64, f64)> = c.params.iter().map(|p| (p.lower, p.upper)).collect();
@@ -1025,6 +1025,17 @@ pub fn compare_options(opts: &ExplainOptions) -> CompareOptions {
         noise: opts.noise.clone(),
         ..CompareOptions::default()
     }
+}
+
+/// The fit options of `opts`, with the tolerances no tighter than the
+/// model's own precision ([`Model::fit_tolerances`]).
+fn fit_options(model: &dyn Model, opts: &ExplainOptions) -> FitOptions {
+    let mut fit = opts.fit.clone();
+    if let Some((ftol, xtol)) = model.fit_tolerances() {
+        fit.ftol = fit.ftol.max(ftol);
+        fit.xtol = fit.xtol.max(xtol);
+    }
+    fit
 }
 
 /// Outputs up to which every output must be within the floor factor.

@@ -99,6 +99,17 @@ pub trait Model: Send + Sync {
         "txt"
     }
 
+    /// The loosest fit tolerances worth using on this model: `(ftol, xtol)`
+    /// of [`FitOptions`](crate::fit::FitOptions) (relative cost change,
+    /// step in parameter scales). A model whose predictions are only as
+    /// exact as an iterative solver's tolerance (a cloth) gains nothing from
+    /// fitting below it, and each iteration costs whole simulations;
+    /// [`explain`](crate::explain::explain) never fits tighter than this.
+    /// `None` (the default): the options as given.
+    fn fit_tolerances(&self) -> Option<(f64, f64)> {
+        None
+    }
+
     /// Whether a candidate's qualitative signature (fault tree, temporal
     /// signature) agrees with the residuals the model leaves on `rec`;
     /// `None` when the model has no qualitative reasoning for it.

@@ -441,13 +441,13 @@ class SolverParams:
     def __new__(
         cls,
         *,
-        method: str = "gauss-seidel",
+        method: str = "newton",
         stretch_tolerance: float = 1e-4,
         max_iterations: int = 1000,
         gravity: Optional[_Vec3] = None,
         velocity_iterations: int = 0,
         warm_start: bool = True,
-        refactor_ratio: float = 0.5,
+        refactor_ratio: float = 0.3,
         contact_tolerance: float = 1e-4,
     ) -> SolverParams: ...
     def replace(self, **changes: Any) -> SolverParams: ...
