@@ -357,14 +357,13 @@ fn cloth_truth_text(hidden: &[ClothHidden], chosen: &[RankedCandidate]) -> Strin
             } else {
                 String::new()
             };
+            let unit = unit_suffix(&p.unit);
             s.push_str(&format!(
-                "   The truth hidden in the recording (examples/make_cloth_demo_data.rs): {} = {} {};\n   \
-                 explain, not told it, found {}{uncertainty} {}.\n",
+                "   The truth hidden in the recording (examples/make_cloth_demo_data.rs): {} = {}{unit};\n   \
+                 explain, not told it, found {}{uncertainty}{unit}.\n",
                 p.name,
                 num(*truth),
-                p.unit,
                 num(p.value),
-                p.unit
             ));
         }
     }
@@ -391,14 +390,13 @@ fn truth_text(case: &HiddenCase, chosen: &[RankedCandidate]) -> String {
             } else {
                 String::new()
             };
+            let unit = unit_suffix(&p.unit);
             s.push_str(&format!(
-                "   The truth hidden in the recording (examples/make_demo_data.rs): {} = {} {};\n   \
-                 explain, not told it, found {}{uncertainty} {}.\n",
+                "   The truth hidden in the recording (examples/make_demo_data.rs): {} = {}{unit};\n   \
+                 explain, not told it, found {}{uncertainty}{unit}.\n",
                 p.name,
                 num(*truth),
-                p.unit,
                 num(p.value),
-                p.unit
             ));
         }
     }
@@ -416,6 +414,14 @@ fn indent(text: &str) -> String {
             }
         })
         .collect()
+}
+
+/// " unit", or nothing for a dimensionless parameter (unit "1" or none).
+fn unit_suffix(unit: &str) -> String {
+    match unit {
+        "" | "1" => String::new(),
+        u => format!(" {u}"),
+    }
 }
 
 #[cfg(test)]

@@ -19,16 +19,15 @@ fn num(v: f64) -> String {
 /// A fitted parameter as `name = value ± std_error unit` (no `±` when the
 /// error is not determined, e.g. at a bound).
 pub fn param_text(p: &FittedParam) -> String {
+    // A dimensionless parameter (unit "1" or none) is printed bare.
+    let unit = match p.unit.as_str() {
+        "" | "1" => String::new(),
+        u => format!(" {u}"),
+    };
     if p.std_error.is_finite() {
-        format!(
-            "{} = {} ± {} {}",
-            p.name,
-            num(p.value),
-            num(p.std_error),
-            p.unit
-        )
+        format!("{} = {} ± {}{unit}", p.name, num(p.value), num(p.std_error))
     } else {
-        format!("{} = {} {}", p.name, num(p.value), p.unit)
+        format!("{} = {}{unit}", p.name, num(p.value))
     }
 }
 
