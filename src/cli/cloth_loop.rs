@@ -29,7 +29,7 @@ use serde_json::{Value, json};
 use super::BadInput;
 use super::compare::CompareArgs;
 use super::explain::ExplainArgs;
-use super::fix::{FixArgs, Pick, check_out, effect_line, picked};
+use super::fix::{FixArgs, check_out, checked_pick, effect_line, picked};
 use super::report::{
     HoldArg, LoopArgs, args_text, args_text_with_model, explanation_json, json_text, print_notes,
     report_line, run_explain_model,
@@ -491,32 +491,7 @@ pub fn with_effects(
 pub fn fix_command(args: &FixArgs, scene_path: &Path) -> anyhow::Result<()> {
     let loaded = load(&args.common, scene_path)?;
     check_out(&args.out, loaded.scene_file.as_deref())?;
-    let candidates = loaded.model.candidates();
-    let pick = args.effect.as_deref().map(Pick::parse);
-    match &pick {
-        Some(Pick::Rank(n)) if *n == 0 || *n > candidates.len() => {
-            return Err(BadInput(format!(
-                "--effect {n}: scene {} offers {} candidate effects, ranked 1 to {}",
-                loaded.model.name(),
-                candidates.len(),
-                candidates.len()
-            ))
-            .into());
-        }
-        Some(Pick::Id(id)) if !candidates.iter().any(|c| &c.id == id) => {
-            return Err(BadInput(format!(
-                "--effect {id}: scene {} offers no candidate with that id; its candidates are {}",
-                loaded.model.name(),
-                candidates
-                    .iter()
-                    .map(|c| c.id.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ))
-            .into());
-        }
-        _ => {}
-    }
+    let pick = checked_pick(args.effect.as_deref(), &loaded.model, "scene")?;
     print_notes(&loaded.notes);
     let ex = run_explain_model(&loaded.model, &loaded.rec, &loaded.noise, false)?;
     let mut out = format!(

@@ -47,6 +47,46 @@ pub(super) enum Pick {
     Id(String),
 }
 
+/// Parses `--effect` and checks it against the model's candidates: a rank
+/// within them or an id one of them has. `what` names the model ("model",
+/// "scene") in the message.
+///
+/// # Errors
+/// [`BadInput`] naming the candidates when it matches none.
+pub(super) fn checked_pick(
+    effect: Option<&str>,
+    model: &dyn modelgap::Model,
+    what: &str,
+) -> anyhow::Result<Option<Pick>> {
+    let candidates = model.candidates();
+    let pick = effect.map(Pick::parse);
+    match &pick {
+        Some(Pick::Rank(n)) if *n == 0 || *n > candidates.len() => {
+            return Err(BadInput(format!(
+                "--effect {n}: {what} {} offers {} candidate effects, ranked 1 to {}",
+                model.name(),
+                candidates.len(),
+                candidates.len()
+            ))
+            .into());
+        }
+        Some(Pick::Id(id)) if !candidates.iter().any(|c| &c.id == id) => {
+            return Err(BadInput(format!(
+                "--effect {id}: {what} {} offers no candidate with that id; its candidates are {}",
+                model.name(),
+                candidates
+                    .iter()
+                    .map(|c| c.id.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ))
+            .into());
+        }
+        _ => {}
+    }
+    Ok(pick)
+}
+
 impl Pick {
     pub(super) fn parse(text: &str) -> Pick {
         match text.trim().parse::<usize>() {
@@ -69,32 +109,7 @@ pub fn run(args: &FixArgs) -> anyhow::Result<()> {
     }
     let loaded = load_loop(&args.common)?;
     check_out(&args.out, loaded.model_file.as_deref())?;
-    let candidates = loaded.model.candidates();
-    let pick = args.effect.as_deref().map(Pick::parse);
-    match &pick {
-        Some(Pick::Rank(n)) if *n == 0 || *n > candidates.len() => {
-            return Err(BadInput(format!(
-                "--effect {n}: model {} offers {} candidate effects, ranked 1 to {}",
-                loaded.model.name(),
-                candidates.len(),
-                candidates.len()
-            ))
-            .into());
-        }
-        Some(Pick::Id(id)) if !candidates.iter().any(|c| &c.id == id) => {
-            return Err(BadInput(format!(
-                "--effect {id}: model {} offers no candidate with that id; its candidates are {}",
-                loaded.model.name(),
-                candidates
-                    .iter()
-                    .map(|c| c.id.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ))
-            .into());
-        }
-        _ => {}
-    }
+    let pick = checked_pick(args.effect.as_deref(), &loaded.model, "model")?;
     print_notes(&loaded.notes);
     let ex = run_explain(&loaded, false)?;
     let mut out = format!(

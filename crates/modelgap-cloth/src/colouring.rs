@@ -42,7 +42,7 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use crate::constraints::DistanceConstraints;
-use crate::error::{ClothError, Result};
+use crate::error::Result;
 
 /// Colours with at least this many constraints are solved in parallel when
 /// the current rayon pool has more than one thread; smaller ones in place,
@@ -108,19 +108,12 @@ impl ConstraintColouring {
     /// constraints at a dynamic particle.
     ///
     /// # Errors
-    /// [`ClothError::VertexOutOfRange`] when a constraint names a particle at
+    /// [`ClothError::VertexOutOfRange`](crate::ClothError::VertexOutOfRange) when a constraint names a particle at
     /// or past `inv_mass.len()`.
     pub fn new(constraints: &DistanceConstraints, inv_mass: &[f64]) -> Result<Self> {
         let n = inv_mass.len();
         let m = constraints.len();
-        for &p in constraints.a.iter().chain(&constraints.b) {
-            if p as usize >= n {
-                return Err(ClothError::VertexOutOfRange {
-                    vertex: p as usize,
-                    n_vertices: n,
-                });
-            }
-        }
+        constraints.check_particles(n)?;
         let is_static: Vec<bool> = inv_mass.iter().map(|&k| k == 0.0).collect();
         let ends = |i: usize| [constraints.a[i] as usize, constraints.b[i] as usize];
 
@@ -588,7 +581,7 @@ mod tests {
         assert!(
             matches!(
                 e,
-                ClothError::VertexOutOfRange {
+                crate::ClothError::VertexOutOfRange {
                     vertex: 3,
                     n_vertices: 2
                 }

@@ -77,6 +77,23 @@ impl DistanceConstraints {
         worst
     }
 
+    /// Checks that every constraint names a particle below `n_particles`.
+    ///
+    /// # Errors
+    /// [`ClothError::VertexOutOfRange`](crate::ClothError::VertexOutOfRange)
+    /// for the first that does not.
+    pub fn check_particles(&self, n_particles: usize) -> crate::Result<()> {
+        for &p in self.a.iter().chain(&self.b) {
+            if p as usize >= n_particles {
+                return Err(crate::ClothError::VertexOutOfRange {
+                    vertex: p as usize,
+                    n_vertices: n_particles,
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// Whether any constraint is compliant.
     #[must_use]
     pub fn any_compliant(&self) -> bool {

@@ -148,14 +148,7 @@ impl StripDecomposition {
                 value: positions.len() as f64,
             });
         }
-        for &p in constraints.a.iter().chain(&constraints.b) {
-            if p as usize >= n {
-                return Err(ClothError::VertexOutOfRange {
-                    vertex: p as usize,
-                    n_vertices: n,
-                });
-            }
-        }
+        constraints.check_particles(n)?;
         let is_static: Vec<bool> = inv_mass.iter().map(|&k| k == 0.0).collect();
         let ends = |i: usize| [constraints.a[i] as usize, constraints.b[i] as usize];
 
