@@ -389,18 +389,22 @@ impl ClothWorld {
                 // more harm than good. Newton always starts from them.
                 let scale = (h / last) * (h / last);
                 ws.mu.iter_mut().for_each(|m| *m *= scale);
-                let cold = cs.max_stretch(&ws.pred);
-                // Newton starts from the free preview with these impulses
-                // (an inconsistent but close start: applying them to the
-                // positions first, one after the other, can stretch a
-                // swinging cloth by 100 % and cost dozens of iterations).
-                if !newton {
+                if newton {
+                    // Newton starts from the free preview with these impulses
+                    // (an inconsistent but close start: applying them to the
+                    // positions first, one after the other, can stretch a
+                    // swinging cloth by 100 % and cost dozens of iterations).
+                    if ws.mu.iter().any(|m| !m.is_finite()) {
+                        ws.mu.fill(0.0);
+                    }
+                } else {
+                    let cold = cs.max_stretch(&ws.pred);
                     solver::apply_impulses(cs, &ps.inv_mass, &ws.mu, &mut ws.pred);
-                }
-                let warm = cs.max_stretch(&ws.pred);
-                if warm.is_nan() || (warm >= cold && !newton) {
-                    ws.pred.clone_from(&ws.free);
-                    ws.mu.fill(0.0);
+                    let warm = cs.max_stretch(&ws.pred);
+                    if warm.is_nan() || warm >= cold {
+                        ws.pred.clone_from(&ws.free);
+                        ws.mu.fill(0.0);
+                    }
                 }
             }
             _ => ws.mu.fill(0.0),
