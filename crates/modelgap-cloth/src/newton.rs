@@ -27,7 +27,7 @@
 //!
 //! ```text
 //! ⎡ K   Jᵀ⎤ ⎡δx⎤     ⎡F⎤        K = M + Σ_c μ_c⁺ ∇²C_c + κ P_contacts
-//! ⎣ J   0 ⎦ ⎣δμ⎦ = − ⎣C⎦,       ∇²C_c = [H −H; −H H],  H = (I − n nᵀ)/|x_a − x_b|
+//! ⎣ J  −E ⎦ ⎣δμ⎦ = − ⎣C⎦,       ∇²C_c = [H −H; −H H],  H = (I − n nᵀ)/|x_a − x_b|
 //! ```
 //!
 //! `μ ∇²C` is the geometric stiffness of a link under tension: moving a
@@ -35,30 +35,59 @@
 //! Gauss–Newton (fast projection) step `J M⁻¹ Jᵀ δμ = C` drops it, which is
 //! exact for slack cloth and hopeless for a taut row between two pins (the
 //! `two-corners` scene), where all the stiffness is geometric. Compressed
-//! links contribute `μ⁺ = max(μ, 0)`: `K` stays positive definite, so the
-//! matrix is quasi-definite (`K ≻ 0`, a tiny `−ε` on the impulse block) and
-//! its `LDLᵀ` factorisation exists for any symmetric ordering whose pivots
-//! are of the expected sign. Statics have no rows. Momentum: every term of
-//! `Jᵀμ` and of `∇²C` comes in equal and opposite pairs, so `Σ F` changes
-//! only through `M δx`, and the total momentum is conserved by every step,
-//! full or shortened, fresh factor or stale.
+//! links contribute `μ⁺ = max(μ, 0)`, so `K` stays positive definite.
+//! `E = diag(ε (k_a + k_b) + α_c/h²)` is positive: the compliance `α` of a
+//! compliant link, plus a proximal shift [`REGULARISATION`] that changes
+//! only the step, not the solution it converges to. Statics have no rows.
+//! Momentum: every term of `Jᵀμ` and of `∇²C` comes in equal and opposite
+//! pairs, so `Σ F` changes only through `M δx`, and the total momentum is
+//! conserved by every step, full or shortened, fresh factor or stale.
 //!
-//! # Factorisation and reuse
+//! # The reduced system
 //!
-//! The sparsity of the KKT matrix is fixed by the topology. The ordering is
-//! computed once: an approximate minimum degree ordering of the particle
-//! graph, each particle's three rows followed by the impulses of the
-//! constraints whose dynamic particles are then all eliminated. Every
-//! impulse pivot therefore comes after a positive position pivot and is
-//! well scaled (negative, of order the reduced mass), so no pivoting is
-//! needed. The impulse rows are scaled by the reduced mass `1/(k_a + k_b)`
-//! so both kinds of pivot have the same magnitude. The symbolic
-//! factorisation is done once per topology (faer's supernodal/simplicial
-//! `LDLᵀ`); the numeric factor is kept across iterations and steps (a chord
-//! method: the residual is always fresh, the matrix may be stale) and
-//! recomputed when an iteration shrinks the residual by less than
+//! `E` is diagonal, so the impulses are eliminated exactly:
+//! `δμ = E⁻¹ (J δx + C)`, and the positions solve the symmetric positive
+//! definite system
+//!
+//! ```text
+//! (K + Jᵀ E⁻¹ J) δx = −F − Jᵀ E⁻¹ C
+//! ```
+//!
+//! of three rows per dynamic particle, whose pattern is the mesh's: a 3×3
+//! block per particle and per link. This is the same Newton step as the
+//! saddle-point system, at a third of the size (2700 rows instead of 4434
+//! on a 30 × 30 cloth). Its Cholesky factor (faer's supernodal `LLᵀ`, the
+//! particles numbered once per topology in an approximate minimum degree
+//! order) costs about 0.85 ms on 30 × 30, against 3.5 ms for the `LDLᵀ` of
+//! the saddle-point matrix with the impulses ordered after their particles
+//! (367 k nonzeros) and 2 ms with them ordered by minimum degree (100 k,
+//! simplicial). The reduction is the penalty method's matrix with the
+//! penalty `E⁻¹` huge, but it is not the penalty method: the impulses are
+//! unknowns, the constraint is held exactly at convergence, and `E` only
+//! weights the step.
+//!
+//! # Factor reuse
+//!
+//! The numeric factor is kept across iterations and steps (a chord method:
+//! the residual is always fresh, the matrix may be stale) and recomputed
+//! when an iteration shrinks the merit by less than
 //! [`SolverParams::refactor_ratio`](crate::SolverParams::refactor_ratio) or a
-//! stale step fails the line search.
+//! stale step fails the line search. A stale factor is the exact reduction
+//! of a stale saddle-point matrix only together with its own `J` and `E`,
+//! so the directions and weights of the factorised matrix are kept with it
+//! and used for the right-hand side and for `δμ` (with today's directions
+//! instead, the stale steps failed and factorisations per step doubled).
+//!
+//! # Warm start
+//!
+//! A step starts from the free preview plus last step's correction
+//! `x − x̃` (scaled by the step ratio squared), with last step's impulses
+//! and contact set. A cloth at rest then starts at rest, and a swinging one
+//! with last step's centripetal pull already applied: the initial stretch
+//! of `corner` falls from up to 40 % to a few per cent. (Applying last
+//! step's impulses along the preview's directions instead stretched
+//! `two-corners` without bound; extrapolating the correction linearly in
+//! time was worse than keeping it.)
 //!
 //! # Globalisation
 //!
@@ -91,42 +120,47 @@
 //! # Convergence
 //!
 //! A step has converged when every relative stretch is at most the
-//! tolerance and nothing penetrates a collider by more than the contact
-//! tolerance (the Gauss–Seidel criterion). The momentum residual `|F_i|/m_i`
-//! is driven down by the merit but not required to vanish.
+//! tolerance and the momentum residual of every particle in contact is at
+//! most the tolerance times the mean rest length (friction acts only
+//! through it). Particles in contact are projected onto their surfaces at
+//! every evaluation and every other particle is outside every collider, so
+//! nothing penetrates. The momentum residual of free particles is driven
+//! down by the merit but not required to vanish.
 //!
 //! # Measured
 //!
-//! With these choices (start from the free preview and last step's
-//! impulses; refactor when an iteration shrinks the merit by less than
-//! [`SolverParams::refactor_ratio`](crate::SolverParams::refactor_ratio)
-//! = 0.3; up to [`MAX_INCREASES`] non-monotone full steps), the 30 × 30
-//! reference scenes (3 s, h = 0.01) hold 1e-4 at every step: `corner`
-//! 3.1 iterations and 1.1 factorisations per step, `two-corners` 3.4 and
-//! 0.44, `drape` 3.7 and 2.5. A factorisation of the 4434 × 4434 KKT matrix
-//! costs about 3.5 ms and a solve 0.1–0.3 ms, so factorisations dominate
-//! (about 1.3 s CPU for `corner`, 0.8 s for `two-corners`, 3 s for `drape`,
-//! one thread); see `examples/scene_timing.rs` and `modelgap cloth bench`.
+//! With these choices (refactor ratio 0.3, up to [`MAX_INCREASES`]
+//! non-monotone full steps), the 30 × 30 reference scenes (3 s, h = 0.01)
+//! hold 1e-4 at every step, on one thread: `corner` 2.6 iterations and
+//! 1.16 factorisations per step (0.49 s, 6.1× real time), `two-corners` 2.0
+//! and 0.46 (0.26 s, 11.6×), `drape` 2.5 and 0.93 (0.48 s, 6.3×); see
+//! `examples/scene_timing.rs` and `modelgap cloth bench`. Factorisations
+//! are about 60 % of the time. On `corner` most of them fall in the snaps,
+//! where even fresh Newton steps converge slowly.
 //!
-//! Tried and dropped, measured on the same scenes: GMRES preconditioned by
-//! the stale factor instead of refactoring (a preconditioned iteration costs
-//! a tenth of a factorisation, and it needed too many: 2× slower);
-//! eliminating the impulses into a positions-only SPD system `K + Jᵀ W J`
-//! (factorisation 1.5× cheaper, but the stale factor no longer serves, since
-//! `W` is huge and follows the directions: no faster overall); a simplicial
-//! instead of the supernodal factorisation (3× slower); refactor ratios
-//! from 0.3 to 0.99 (no better); a geometric nested-dissection ordering of
-//! the particles instead of AMD (factor 418 k instead of 367 k nonzeros,
-//! 10 % slower).
+//! Tried and dropped, measured on the same scenes: the saddle-point
+//! matrix itself (`LDLᵀ`, 3.5 ms or 2 ms a factorisation, above); GMRES
+//! preconditioned by the stale factor instead of refactoring (too many
+//! iterations: 2× slower); a penalty `K + Jᵀ W J` with `W` independent of
+//! the factor (the stale factor stopped serving); a simplicial instead of
+//! the supernodal factorisation (2.3× slower on the reduced matrix);
+//! other supernode amalgamation thresholds (none better than faer's);
+//! refactor ratios from 0.1 to 0.7 (0.3 is best; 0.7 stalls `drape` at the
+//! impact); keeping a stale factor when few more stale iterations are
+//! predicted to reach the tolerance (as many iterations added as
+//! factorisations saved); a few Gauss–Seidel sweeps before or after each
+//! Newton step (no fewer factorisations); the exact friction Jacobian
+//! while sliding (no stiffness along the slip: `drape` oscillated between
+//! stick and slip, 100× slower); a geometric nested-dissection ordering
+//! (more fill than minimum degree).
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
-use faer::perm::PermRef;
-use faer::sparse::linalg::amd;
+use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LdltRef, SymbolicCholesky, SymmetricOrdering,
+    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
     factorize_symbolic_cholesky,
 };
+use faer::sparse::linalg::{SupernodalThreshold, amd};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 use nalgebra::{Matrix3, Vector3};
@@ -135,13 +169,14 @@ use crate::constraints::DistanceConstraints;
 use crate::contact::{Collider, ContactState};
 use crate::solver::{self, SolverParams};
 
-/// Relative shift `−ε` on the (scaled) impulse diagonal of the KKT matrix
-/// (dimensionless): a proximal term on the impulses. It changes only Newton's
+/// The proximal shift `ε` in `E = ε (k_a + k_b) + α/h²` (dimensionless:
+/// relative to the reduced mass of each link). It changes only Newton's
 /// step, not the solution it converges to, and bounds the impulse of a
 /// nearly dependent constraint (a straight row between two pins, whose
 /// tension the linearisation cannot see): with 1e-10 such a row took huge
 /// impulse steps that the next direction change turned into momentum
-/// errors; 1e-6 cut `two-corners` from 15 to 4 iterations per step.
+/// errors; 1e-6 cut `two-corners` from 15 to 4 iterations per step
+/// (1e-8 to 1e-5 measured again: 1e-6 is best).
 pub const REGULARISATION: f64 = 1e-6;
 
 /// Full Newton steps (fresh factor) that may raise the merit in one step:
@@ -226,7 +261,6 @@ struct State {
     /// Largest momentum residual of a particle in contact (m): friction
     /// acts only through it, so a step has not converged until it is small.
     contact_residual: f64,
-    penetration: f64,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -240,14 +274,14 @@ struct Contact {
     tangential_stiffness: f64,
 }
 
-/// The KKT system of one topology: ordering, symbolic and numeric factors,
-/// value slots, iterates and scratch. Nothing is allocated per iteration.
+/// Newton's linear system of one topology, reduced to the positions: its
+/// pattern, ordering, symbolic and numeric factors, value slots, iterates and
+/// scratch. Nothing is allocated per iteration.
 pub(crate) struct NewtonSolver {
     n_particles: usize,
     n_constraints: usize,
-    /// First KKT row of each particle (`NONE` for a static one).
+    /// First row of each particle (`NONE` for a static one).
     dof: Vec<u32>,
-    n_dof: usize,
     dim: usize,
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
@@ -258,19 +292,22 @@ pub(crate) struct NewtonSolver {
     /// Slots of the off-diagonal block of each constraint between two
     /// dynamic particles (`NONE` otherwise).
     edge_slots: Vec<[u32; 9]>,
-    /// Slots of `J` (stored as `Jᵀ` above the diagonal): a's three, b's three.
-    jac_slots: Vec<[u32; 6]>,
-    mu_diag_slot: Vec<u32>,
-    /// Scale of each impulse row, the reduced mass `1/(k_a + k_b)` (kg).
-    scale: Vec<f64>,
-    signs: Vec<i8>,
+    /// `1/E_c` of the factorised matrix (kg m per m): the weight of each
+    /// constraint in the Schur complement, kept so the right-hand side and
+    /// the impulse update match the factor even when it is stale.
+    inv_e: Vec<f64>,
+    /// Constraint directions of the factorised matrix: a stale factor is
+    /// the exact reduction of a stale `J` only with its own directions.
+    factor_normals: Vec<Vector3<f64>>,
     symbolic: SymbolicCholesky<usize>,
     l_values: Vec<f64>,
     has_factor: bool,
     mem: MemBuffer,
-    mass_scale: f64,
     mean_rest: f64,
     rhs: Vec<f64>,
+    /// `x − x̃` of the last solve (m): the next step starts from its
+    /// preview plus this correction.
+    last_correction: Vec<Vector3<f64>>,
     cur: State,
     trial: State,
 }
@@ -285,32 +322,25 @@ impl std::fmt::Debug for NewtonSolver {
     }
 }
 
-/// Upper-triangle index of a symmetric 3×3 entry.
+/// One index of a symmetric 3×3 entry (either triangle's).
 fn sym(i: usize, j: usize) -> (usize, usize) {
     (i.min(j), i.max(j))
 }
 
 impl NewtonSolver {
-    /// Builds the KKT pattern, its ordering and its symbolic factor.
+    /// Builds the pattern of the reduced matrix, its ordering and its
+    /// symbolic factor.
     pub(crate) fn new(
         constraints: &DistanceConstraints,
         inv_mass: &[f64],
     ) -> Result<Self, FactorFailed> {
         let n_particles = inv_mass.len();
         let m = constraints.len();
-        let mut dof = vec![NONE; n_particles];
-        let mut n_dyn = 0usize;
-        for (i, &k) in inv_mass.iter().enumerate() {
-            if k > 0.0 {
-                dof[i] = (3 * n_dyn) as u32;
-                n_dyn += 1;
-            }
-        }
-        let n_dof = 3 * n_dyn;
-        let dim = n_dof + m;
-        let mu_row = |c: usize| n_dof + c;
+        let dof = fill_reducing_rows(constraints, inv_mass)?;
+        let dim = 3 * dof.iter().filter(|&&d| d != NONE).count();
 
-        // Pattern (upper triangle) as (col, row) pairs.
+        // Pattern (upper triangle) as (col, row) pairs: a 3×3 block per
+        // dynamic particle and per constraint between two of them.
         let mut entries: Vec<(usize, usize)> = Vec::new();
         for &d in &dof {
             if d == NONE {
@@ -336,14 +366,6 @@ impl NewtonSolver {
                     }
                 }
             }
-            for d in [da, db] {
-                if d != NONE {
-                    for i in 0..3 {
-                        entries.push((mu_row(c), d as usize + i));
-                    }
-                }
-            }
-            entries.push((mu_row(c), mu_row(c)));
         }
         entries.sort_unstable();
         entries.dedup();
@@ -378,149 +400,40 @@ impl NewtonSolver {
             }
         }
         let mut edge_slots = vec![[NONE; 9]; m];
-        let mut jac_slots = vec![[NONE; 6]; m];
-        let mut mu_diag_slot = vec![NONE; m];
-        let mut scale = vec![0.0; m];
         for c in 0..m {
-            let (pa, pb) = (constraints.a[c] as usize, constraints.b[c] as usize);
-            let (da, db) = (dof[pa], dof[pb]);
+            let (da, db) = (
+                dof[constraints.a[c] as usize],
+                dof[constraints.b[c] as usize],
+            );
             if da != NONE && db != NONE {
                 for i in 0..3 {
                     for j in 0..3 {
                         // Row i of a, column j of b: the block is symmetric
-                        // (a multiple of a symmetric H), so either triangle's
-                        // slot holds the same value.
+                        // (a multiple of a symmetric matrix), so either
+                        // triangle's slot holds the same value.
                         edge_slots[c][3 * i + j] = slot(da as usize + i, db as usize + j);
                     }
                 }
             }
-            for (side, d) in [da, db].into_iter().enumerate() {
-                if d != NONE {
-                    for i in 0..3 {
-                        jac_slots[c][3 * side + i] = slot(d as usize + i, mu_row(c));
-                    }
-                }
-            }
-            mu_diag_slot[c] = slot(mu_row(c), mu_row(c));
-            let w = inv_mass[pa] + inv_mass[pb];
-            scale[c] = if w > 0.0 { 1.0 / w } else { 0.0 };
         }
 
-        // Ordering: AMD on the graph of dynamic particles, then each
-        // particle's rows followed by the impulses it completes.
-        let (fwd, inv) = {
-            let mut adj: Vec<(usize, usize)> = Vec::new();
-            for p in 0..n_dyn {
-                adj.push((p, p));
-            }
-            for c in 0..m {
-                let (da, db) = (
-                    dof[constraints.a[c] as usize],
-                    dof[constraints.b[c] as usize],
-                );
-                if da != NONE && db != NONE {
-                    let (a, b) = ((da / 3) as usize, (db / 3) as usize);
-                    adj.push((a.max(b), a.min(b)));
-                }
-            }
-            adj.sort_unstable();
-            adj.dedup();
-            let mut pc = vec![0usize; n_dyn + 1];
-            let mut pr = Vec::with_capacity(adj.len());
-            for &(col, row) in &adj {
-                pc[col + 1] += 1;
-                pr.push(row);
-            }
-            for c in 0..n_dyn {
-                pc[c + 1] += pc[c];
-            }
-            let mut perm = vec![0usize; n_dyn];
-            let mut perm_inv = vec![0usize; n_dyn];
-            if n_dyn > 0 {
-                let pattern = SymbolicSparseColMatRef::new_checked(n_dyn, n_dyn, &pc, None, &pr);
-                let mut buf = MemBuffer::try_new(amd::order_scratch::<usize>(n_dyn, pr.len()))
-                    .map_err(|_| FactorFailed)?;
-                amd::order(
-                    &mut perm,
-                    &mut perm_inv,
-                    pattern,
-                    amd::Control::default(),
-                    MemStack::new(&mut buf),
-                )
-                .map_err(|_| FactorFailed)?;
-            }
-            // Dynamic-particle index -> world particle, and incident constraints.
-            let mut particle_of = Vec::with_capacity(n_dyn);
-            for (p, &d) in dof.iter().enumerate() {
-                if d != NONE {
-                    particle_of.push(p);
-                }
-            }
-            let mut incident: Vec<Vec<u32>> = vec![Vec::new(); n_particles];
-            for c in 0..m {
-                incident[constraints.a[c] as usize].push(c as u32);
-                incident[constraints.b[c] as usize].push(c as u32);
-            }
-            let mut eliminated = vec![false; n_particles];
-            let mut placed = vec![false; m];
-            let mut fwd = Vec::with_capacity(dim);
-            for &q in &perm {
-                let p = particle_of[q];
-                eliminated[p] = true;
-                for i in 0..3 {
-                    fwd.push(dof[p] as usize + i);
-                }
-                for &c in &incident[p] {
-                    let c = c as usize;
-                    let (pa, pb) = (constraints.a[c] as usize, constraints.b[c] as usize);
-                    let done = |x: usize| dof[x] == NONE || eliminated[x];
-                    if !placed[c] && done(pa) && done(pb) {
-                        placed[c] = true;
-                        fwd.push(mu_row(c));
-                    }
-                }
-            }
-            // Constraints between two statics cannot exist (rejected at the
-            // door); any left over go last.
-            for (c, &done) in placed.iter().enumerate() {
-                if !done {
-                    fwd.push(mu_row(c));
-                }
-            }
-            let mut inv = vec![0usize; dim];
-            for (new, &old) in fwd.iter().enumerate() {
-                inv[old] = new;
-            }
-            (fwd, inv)
-        };
+        // The rows are already in a fill-reducing order: the symbolic factor
+        // is a supernodal Cholesky factor of the matrix as it is (faer would
+        // otherwise permute the values at every factorisation).
         let symbolic = {
             let pattern = SymbolicSparseColMatRef::new_checked(dim, dim, &col_ptr, None, &row_idx);
-            let perm = PermRef::new_checked(&fwd, &inv, dim);
-            factorize_symbolic_cholesky(
-                pattern,
-                Side::Upper,
-                SymmetricOrdering::Custom(perm),
-                CholeskySymbolicParams::default(),
-            )
-            .map_err(|_| FactorFailed)?
+            let params = CholeskySymbolicParams {
+                supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+                ..CholeskySymbolicParams::default()
+            };
+            factorize_symbolic_cholesky(pattern, Side::Upper, SymmetricOrdering::Identity, params)
+                .map_err(|_| FactorFailed)?
         };
         let req = StackReq::any_of(&[
-            symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
+            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
         ]);
         let mem = MemBuffer::try_new(req).map_err(|_| FactorFailed)?;
-        let mut signs = vec![1i8; dim];
-        signs[n_dof..].fill(-1);
-        let masses: Vec<f64> = inv_mass
-            .iter()
-            .filter(|&&k| k > 0.0)
-            .map(|&k| 1.0 / k)
-            .collect();
-        let mass_scale = if masses.is_empty() {
-            1.0
-        } else {
-            masses.iter().sum::<f64>() / masses.len() as f64
-        };
         let mean_rest = if m == 0 {
             1.0
         } else {
@@ -542,7 +455,6 @@ impl NewtonSolver {
             n_particles,
             n_constraints: m,
             dof,
-            n_dof,
             dim,
             values: vec![0.0; row_idx.len()],
             l_values: vec![0.0; symbolic.len_val()],
@@ -550,16 +462,14 @@ impl NewtonSolver {
             row_idx,
             diag_slots,
             edge_slots,
-            jac_slots,
-            mu_diag_slot,
-            scale,
-            signs,
+            inv_e: vec![0.0; m],
+            factor_normals: vec![Vector3::zeros(); m],
             symbolic,
             has_factor: false,
             mem,
-            mass_scale,
             mean_rest,
             rhs: vec![0.0; dim],
+            last_correction: vec![Vector3::zeros(); n_particles],
             cur: state.clone(),
             trial: state,
         })
@@ -575,6 +485,7 @@ impl NewtonSolver {
         x: &mut [Vector3<f64>],
         mu: &mut [f64],
         contacts: &mut [ContactState],
+        warm: Option<f64>,
     ) -> NewtonOutcome {
         debug_assert_eq!(x.len(), self.n_particles);
         debug_assert_eq!(mu.len(), self.n_constraints);
@@ -583,17 +494,36 @@ impl NewtonSolver {
         let mut out = NewtonOutcome::default();
         self.cur.x.copy_from_slice(x);
         self.cur.mu.copy_from_slice(mu);
-        self.cur.r.fill(Vector3::zeros());
-        self.cur.contact.fill(Contact::default());
+        match warm {
+            Some(scale) => {
+                // Warm start: last step's contacts stay active (evaluate
+                // projects them onto their surfaces and the iteration
+                // releases those that pull), and every particle starts from
+                // its preview plus last step's correction `x − x̃`, which
+                // scales with the step squared. A cloth at rest starts at
+                // rest, and a swinging one with the centripetal pull of the
+                // last step already applied.
+                let n_colliders = input.colliders.len();
+                for (i, ct) in self.cur.contact.iter_mut().enumerate() {
+                    if ct.collider as usize >= n_colliders {
+                        ct.active = false;
+                    }
+                    if input.inv_mass[i] > 0.0 {
+                        self.cur.x[i] += self.last_correction[i] * scale;
+                    }
+                }
+            }
+            None => {
+                self.cur.r.fill(Vector3::zeros());
+                self.cur.contact.fill(Contact::default());
+            }
+        }
         evaluate(&mut self.cur, input, self.mean_rest);
         let mut need_refactor = false;
         let mut increases_left = MAX_INCREASES;
         loop {
             out.max_stretch = self.cur.max_stretch;
-            if self.cur.max_stretch <= tol
-                && self.cur.penetration <= params.contact_tolerance
-                && self.cur.contact_residual <= tol * self.mean_rest
-            {
+            if self.cur.max_stretch <= tol && self.cur.contact_residual <= tol * self.mean_rest {
                 out.converged = true;
                 break;
             }
@@ -657,6 +587,9 @@ impl NewtonSolver {
                 evaluate(&mut self.cur, input, self.mean_rest);
             }
         }
+        for i in 0..x.len() {
+            self.last_correction[i] = self.cur.x[i] - input.free[i];
+        }
         x.copy_from_slice(&self.cur.x);
         mu.copy_from_slice(&self.cur.mu);
         for (s, c) in contacts.iter_mut().zip(&self.cur.contact) {
@@ -672,21 +605,31 @@ impl NewtonSolver {
     /// Solves with the current factor at `cur` and line-searches into
     /// `trial`; returns whether a step decreased the merit.
     fn newton_step(&mut self, input: &StepInput<'_>, fresh: bool, allow_increase: bool) -> bool {
+        let cs = input.constraints;
         let cur = &self.cur;
+        // Right-hand side of the reduced system: −F − Jᵀ E⁻¹ C.
         for (p, &d) in self.dof.iter().enumerate() {
-            if d == NONE {
-                continue;
-            }
-            let d = d as usize;
-            for i in 0..3 {
-                self.rhs[d + i] = -cur.f[p][i];
+            if d != NONE {
+                let d = d as usize;
+                for i in 0..3 {
+                    self.rhs[d + i] = -cur.f[p][i];
+                }
             }
         }
         for c in 0..self.n_constraints {
-            self.rhs[self.n_dof + c] = -cur.c[c] * self.scale[c];
+            let v = self.factor_normals[c] * (self.inv_e[c] * cur.c[c]);
+            for (p, sign) in [(cs.a[c] as usize, -1.0), (cs.b[c] as usize, 1.0)] {
+                let d = self.dof[p];
+                if d != NONE {
+                    let d = d as usize;
+                    for i in 0..3 {
+                        self.rhs[d + i] += sign * v[i];
+                    }
+                }
+            }
         }
-        let ldlt = LdltRef::new(&self.symbolic, &self.l_values);
-        ldlt.solve_in_place_with_conj(
+        let llt = LltRef::new(&self.symbolic, &self.l_values);
+        llt.solve_in_place_with_conj(
             Conj::No,
             MatMut::from_column_major_slice_mut(&mut self.rhs, self.dim, 1),
             Par::Seq,
@@ -696,21 +639,31 @@ impl NewtonSolver {
             self.has_factor = false;
             return false;
         }
+        let dof = &self.dof;
+        let rhs = &self.rhs;
+        let step = |p: usize| -> Vector3<f64> {
+            match dof[p] {
+                NONE => Vector3::zeros(),
+                d => {
+                    let d = d as usize;
+                    Vector3::new(rhs[d], rhs[d + 1], rhs[d + 2])
+                }
+            }
+        };
+        // The impulses follow from the positions: δμ = E⁻¹ (J δx + C).
         let mut alpha = 1.0;
         for _ in 0..=MAX_HALVINGS {
             let (cur, trial) = (&self.cur, &mut self.trial);
             trial.r.copy_from_slice(&cur.r);
             trial.contact.copy_from_slice(&cur.contact);
-            for (p, &d) in self.dof.iter().enumerate() {
-                trial.x[p] = if d == NONE {
-                    cur.x[p]
-                } else {
-                    let d = d as usize;
-                    cur.x[p] + alpha * Vector3::new(self.rhs[d], self.rhs[d + 1], self.rhs[d + 2])
-                };
+            for p in 0..self.n_particles {
+                trial.x[p] = cur.x[p] + alpha * step(p);
             }
             for c in 0..self.n_constraints {
-                trial.mu[c] = cur.mu[c] + alpha * self.rhs[self.n_dof + c] * self.scale[c];
+                let (a, b) = (cs.a[c] as usize, cs.b[c] as usize);
+                let n = self.factor_normals[c];
+                let dmu = self.inv_e[c] * (n.dot(&(step(a) - step(b))) + cur.c[c]);
+                trial.mu[c] = cur.mu[c] + alpha * dmu;
             }
             evaluate(trial, input, self.mean_rest);
             if trial.merit < (1.0 - 1e-4 * alpha) * cur.merit {
@@ -733,7 +686,7 @@ impl NewtonSolver {
         false
     }
 
-    /// Fills the KKT values at `cur` and factorises them.
+    /// Fills the reduced matrix `K + Jᵀ E⁻¹ J` at `cur` and factorises it.
     fn factorize(&mut self, input: &StepInput<'_>) -> Result<(), FactorFailed> {
         let cs = input.constraints;
         let cur = &self.cur;
@@ -767,33 +720,28 @@ impl NewtonSolver {
         for c in 0..self.n_constraints {
             let (pa, pb) = (cs.a[c] as usize, cs.b[c] as usize);
             let n = cur.normals[c];
+            self.factor_normals[c] = n;
+            // E = ε (k_a + k_b) + α/h²: the proximal shift and the
+            // compliance (see REGULARISATION).
+            let e = REGULARISATION * (input.inv_mass[pa] + input.inv_mass[pb])
+                + cs.compliance[c] * input.inv_h2;
+            self.inv_e[c] = 1.0 / e;
+            let mut block = n * n.transpose() * self.inv_e[c];
             // Compression enters with a bounded negative stiffness so that
             // K stays positive definite (see COMPRESSION_STIFFNESS).
             let m_min = 1.0 / input.inv_mass[pa].max(input.inv_mass[pb]);
             let tension = cur.mu[c].max(-COMPRESSION_STIFFNESS * m_min * cur.lengths[c]);
             if tension != 0.0 && cur.lengths[c] > f64::MIN_POSITIVE {
-                let h = (Matrix3::identity() - n * n.transpose()) * (tension / cur.lengths[c]);
-                for p in [pa, pb] {
-                    if self.dof[p] != NONE {
-                        add(&mut self.values, &self.diag_slots[p], &h, true);
-                    }
-                }
-                if self.edge_slots[c][0] != NONE {
-                    add(&mut self.values, &self.edge_slots[c], &(-h), false);
+                block += (Matrix3::identity() - n * n.transpose()) * (tension / cur.lengths[c]);
+            }
+            for p in [pa, pb] {
+                if self.dof[p] != NONE {
+                    add(&mut self.values, &self.diag_slots[p], &block, true);
                 }
             }
-            let s = self.scale[c];
-            for i in 0..3 {
-                if self.jac_slots[c][i] != NONE {
-                    self.values[self.jac_slots[c][i] as usize] = s * n[i];
-                }
-                if self.jac_slots[c][3 + i] != NONE {
-                    self.values[self.jac_slots[c][3 + i] as usize] = -s * n[i];
-                }
+            if self.edge_slots[c][0] != NONE {
+                add(&mut self.values, &self.edge_slots[c], &(-block), false);
             }
-            let alpha = cs.compliance[c] * input.inv_h2;
-            let reg = REGULARISATION;
-            self.values[self.mu_diag_slot[c] as usize] = -reg * s - alpha * s * s;
         }
         let pattern = SymbolicSparseColMatRef::new_checked(
             self.dim,
@@ -803,15 +751,11 @@ impl NewtonSolver {
             &self.row_idx,
         );
         let a = SparseColMatRef::new(pattern, &self.values);
-        let result = self.symbolic.factorize_numeric_ldlt(
+        let result = self.symbolic.factorize_numeric_llt(
             &mut self.l_values,
             a,
             Side::Upper,
-            LdltRegularization {
-                dynamic_regularization_signs: Some(&self.signs),
-                dynamic_regularization_delta: 1e-8 * self.mass_scale,
-                dynamic_regularization_epsilon: 1e-13 * self.mass_scale,
-            },
+            LltRegularization::default(),
             Par::Seq,
             MemStack::new(&mut self.mem),
             Default::default(),
@@ -819,6 +763,67 @@ impl NewtonSolver {
         self.has_factor = result.is_ok();
         result.map(|_| ()).map_err(|_| FactorFailed)
     }
+}
+
+/// The first row of each dynamic particle's three (`NONE` for a static
+/// one), numbered in an approximate minimum degree ordering of the graph of
+/// dynamic particles and the constraints between them, so the Cholesky
+/// factor of the reduced matrix stays sparse.
+fn fill_reducing_rows(
+    constraints: &DistanceConstraints,
+    inv_mass: &[f64],
+) -> Result<Vec<u32>, FactorFailed> {
+    let mut node = vec![NONE; inv_mass.len()];
+    let mut particle_of = Vec::new();
+    for (i, &k) in inv_mass.iter().enumerate() {
+        if k > 0.0 {
+            node[i] = particle_of.len() as u32;
+            particle_of.push(i);
+        }
+    }
+    let n = particle_of.len();
+    let mut dof = vec![NONE; inv_mass.len()];
+    if n == 0 {
+        return Ok(dof);
+    }
+    // The graph's pattern, upper triangle, column by column.
+    let mut adj: Vec<(usize, usize)> = (0..n).map(|p| (p, p)).collect();
+    for c in 0..constraints.len() {
+        let (a, b) = (
+            node[constraints.a[c] as usize],
+            node[constraints.b[c] as usize],
+        );
+        if a != NONE && b != NONE {
+            adj.push((a.max(b) as usize, a.min(b) as usize));
+        }
+    }
+    adj.sort_unstable();
+    adj.dedup();
+    let mut col_ptr = vec![0usize; n + 1];
+    let rows: Vec<usize> = adj.iter().map(|&(_, row)| row).collect();
+    for &(col, _) in &adj {
+        col_ptr[col + 1] += 1;
+    }
+    for c in 0..n {
+        col_ptr[c + 1] += col_ptr[c];
+    }
+    let mut perm = vec![0usize; n];
+    let mut perm_inv = vec![0usize; n];
+    let pattern = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &rows);
+    let mut buf =
+        MemBuffer::try_new(amd::order_scratch::<usize>(n, rows.len())).map_err(|_| FactorFailed)?;
+    amd::order(
+        &mut perm,
+        &mut perm_inv,
+        pattern,
+        amd::Control::default(),
+        MemStack::new(&mut buf),
+    )
+    .map_err(|_| FactorFailed)?;
+    for (k, &q) in perm.iter().enumerate() {
+        dof[particle_of[q]] = (3 * k) as u32;
+    }
+    Ok(dof)
 }
 
 /// Between iterations: releases contacts whose impulse pulls the particle
@@ -845,27 +850,11 @@ fn update_contacts(s: &mut State, input: &StepInput<'_>) -> bool {
 fn evaluate(s: &mut State, input: &StepInput<'_>, mean_rest: f64) {
     let cs = input.constraints;
     let k = input.inv_mass;
-    s.g.fill(Vector3::zeros());
-    for c in 0..cs.len() {
-        let (a, b) = (cs.a[c] as usize, cs.b[c] as usize);
-        let d = s.x[a] - s.x[b];
-        let len = d.norm();
-        if len > f64::MIN_POSITIVE {
-            s.normals[c] = d / len;
-        }
-        s.lengths[c] = len;
-        let p = s.mu[c] * s.normals[c];
-        s.g[a] += p;
-        s.g[b] -= p;
-    }
     // Contacts (an active set): an active particle is held on its
-    // collider's surface (at its anchor while friction sticks it), and its
-    // contact impulse `r` is whatever the held directions need; a particle
-    // found inside a collider joins the set here, and
-    // [`update_contacts`] releases or lets slide the others between
-    // iterations.
+    // collider's surface, and its contact impulse `r` is whatever the held
+    // directions need; a particle found inside a collider joins the set
+    // here, and [`update_contacts`] releases the others between iterations.
     if !input.colliders.is_empty() {
-        let mut moved = false;
         #[allow(clippy::needless_range_loop)] // columns indexed together
         for i in 0..s.x.len() {
             if k[i] == 0.0 {
@@ -891,33 +880,26 @@ fn evaluate(s: &mut State, input: &StepInput<'_>, mean_rest: f64) {
                 let col = &input.colliders[ct.collider as usize];
                 let (phi, n) = col.swept_distance(&input.start[i], &s.x[i]);
                 ct.normal = n;
-                if phi != 0.0 {
-                    s.x[i] -= phi * n;
-                    moved = true;
-                }
-            }
-        }
-        if moved {
-            // Positions moved: refresh the directions and impulse sums.
-            s.g.fill(Vector3::zeros());
-            for c in 0..cs.len() {
-                let (a, b) = (cs.a[c] as usize, cs.b[c] as usize);
-                let d = s.x[a] - s.x[b];
-                let len = d.norm();
-                if len > f64::MIN_POSITIVE {
-                    s.normals[c] = d / len;
-                }
-                s.lengths[c] = len;
-                let p = s.mu[c] * s.normals[c];
-                s.g[a] += p;
-                s.g[b] -= p;
+                s.x[i] -= phi * n;
             }
         }
     }
+    // Directions, impulse sums, constraint errors.
+    s.g.fill(Vector3::zeros());
     let mut merit = 0.0;
     let mut max_stretch = 0.0_f64;
     for c in 0..cs.len() {
-        s.c[c] = s.lengths[c] - cs.rest_length[c] - cs.compliance[c] * s.mu[c] * input.inv_h2;
+        let (a, b) = (cs.a[c] as usize, cs.b[c] as usize);
+        let d = s.x[a] - s.x[b];
+        let len = d.norm();
+        if len > f64::MIN_POSITIVE {
+            s.normals[c] = d / len;
+        }
+        s.lengths[c] = len;
+        let p = s.mu[c] * s.normals[c];
+        s.g[a] += p;
+        s.g[b] -= p;
+        s.c[c] = len - cs.rest_length[c] - cs.compliance[c] * s.mu[c] * input.inv_h2;
         let rel = s.c[c] / cs.rest_length[c];
         merit += rel * rel;
         max_stretch = max_stretch.max(rel.abs());
@@ -927,7 +909,6 @@ fn evaluate(s: &mut State, input: &StepInput<'_>, mean_rest: f64) {
     }
     let mut max_residual = 0.0_f64;
     let mut contact_residual = 0.0_f64;
-    let mut penetration = 0.0_f64;
     #[allow(clippy::needless_range_loop)] // columns indexed together
     for i in 0..s.x.len() {
         if k[i] == 0.0 {
@@ -958,11 +939,6 @@ fn evaluate(s: &mut State, input: &StepInput<'_>, mean_rest: f64) {
         }
         let rel = e / mean_rest;
         merit += rel * rel;
-        if !s.contact[i].active {
-            for col in input.colliders {
-                penetration = penetration.max(-col.swept_distance(&input.start[i], &s.x[i]).0);
-            }
-        }
     }
     s.merit = if max_stretch.is_nan() {
         f64::NAN
@@ -972,7 +948,6 @@ fn evaluate(s: &mut State, input: &StepInput<'_>, mean_rest: f64) {
     s.max_stretch = max_stretch;
     s.max_residual = max_residual;
     s.contact_residual = contact_residual;
-    s.penetration = penetration;
 }
 
 #[cfg(test)]
@@ -1005,7 +980,7 @@ mod tests {
         let mut x = free.clone();
         let mut mu = vec![0.0; 2];
         let mut contacts = vec![ContactState::default(); 3];
-        let out = solver.solve(&input, &mut x, &mut mu, &mut contacts);
+        let out = solver.solve(&input, &mut x, &mut mu, &mut contacts, None);
         assert!(out.converged && out.fallback_sweeps == 0, "{out:?}");
         assert!(c.max_stretch(&x) < 1e-4);
         assert!(out.iterations <= 6, "{out:?}");

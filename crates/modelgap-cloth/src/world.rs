@@ -425,7 +425,11 @@ impl ClothWorld {
                 params: &self.params,
                 inv_h2: 1.0 / (h * h),
             };
-            let out = global.solve(&input, &mut ws.pred, &mut ws.mu, &mut ws.contacts);
+            let warm = match (self.params.warm_start, ws.last_dt) {
+                (true, Some(last)) => Some((h / last) * (h / last)),
+                _ => None,
+            };
+            let out = global.solve(&input, &mut ws.pred, &mut ws.mu, &mut ws.contacts, warm);
             report.iterations = out.iterations;
             report.factorizations = out.factorizations;
             report.fallback_sweeps = out.fallback_sweeps;
