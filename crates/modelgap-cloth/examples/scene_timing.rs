@@ -11,6 +11,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let methods = [
         ("newton", Method::Newton),
         ("gauss-seidel", Method::GaussSeidel),
+        ("strips", Method::Strips),
     ];
     println!(
         "scene        method        wall (s)  x real time  max stretch  iters/step  factors  fallbacks  converged  min y (m)"

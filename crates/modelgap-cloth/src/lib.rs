@@ -6,7 +6,7 @@
 //! the step so that every constraint holds at its end, within a relative
 //! stretch tolerance (0.01 % by default). Gauss–Seidel over the constraints is
 //! the paper's any-time iteration; a global Newton solve with a sparse
-//! `LDLᵀ` factor (kept across iterations and steps) is the fast exact one,
+//! Cholesky factor (kept across iterations and steps) is the fast exact one,
 //! and the default.
 //! Contacts with static colliders and Coulomb friction are resolved inside the
 //! same loop.

@@ -47,8 +47,9 @@ pub enum Method {
     GaussSeidel,
     /// All constraints at once: Newton's method on the end-of-step
     /// positions and impulses together, with the geometric stiffness of
-    /// tensioned links, and a sparse `LDLᵀ` factorisation whose ordering and
-    /// symbolic analysis are computed once per topology and whose numeric
+    /// tensioned links; the impulses are eliminated exactly, and the sparse
+    /// Cholesky factorisation of the positions' system has its ordering and
+    /// symbolic analysis computed once per topology and its numeric
     /// factor is reused across iterations and steps while the error keeps
     /// shrinking fast (see [`crate::newton`]). The default: it holds 1e-4
     /// on every reference scene at every step.
