@@ -90,9 +90,11 @@ pub struct SolverParams {
     /// default 0 (off).
     pub velocity_iterations: usize,
     /// Start each step from the previous step's impulses (scaled by the step
-    /// size squared); default true.
+    /// size squared), and Newton also from its last step's position
+    /// correction and contact set; default true.
     pub warm_start: bool,
-    /// Newton only: refactor when one iteration shrinks the largest stretch by
+    /// Newton only: refactor when one iteration shrinks the residual (the
+    /// root of the merit of stretch and momentum, see [`crate::newton`]) by
     /// less than this factor (dimensionless, in (0, 1)); default 0.3.
     pub refactor_ratio: f64,
     /// Allowed penetration into colliders at the end of a converged step (m);

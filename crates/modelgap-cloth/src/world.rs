@@ -390,10 +390,10 @@ impl ClothWorld {
                 let scale = (h / last) * (h / last);
                 ws.mu.iter_mut().for_each(|m| *m *= scale);
                 if newton {
-                    // Newton starts from the free preview with these impulses
-                    // (an inconsistent but close start: applying them to the
-                    // positions first, one after the other, can stretch a
-                    // swinging cloth by 100 % and cost dozens of iterations).
+                    // Newton starts from these impulses and the free preview
+                    // plus its last step's correction (see `newton`; applying
+                    // the impulses to the positions first, one after the
+                    // other, can stretch a swinging cloth by 100 %).
                     if ws.mu.iter().any(|m| !m.is_finite()) {
                         ws.mu.fill(0.0);
                     }
