@@ -14,7 +14,7 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use modelgap::cloth::{ClothWorld, GridCloth, Method, SolverParams, scenes};
+use modelgap::cloth::{ClothWorld, Method, scenes};
 
 /// The same allocator as the `modelgap` binary (see src/main.rs).
 #[global_allocator]
@@ -124,23 +124,13 @@ fn large_steps(c: &mut Criterion) {
             });
         }
     }
-    for n in [100_u32, 300] {
-        let params = SolverParams {
-            method: Method::Newton,
-            max_iterations: 50,
-            ..SolverParams::default()
-        };
-        let mut world = ClothWorld::new(params);
-        world
-            .add_cloth(
-                GridCloth::new(n as usize, n as usize, 1.0 / f64::from(n - 1))
-                    .pin(0)
-                    .pin(n - 1),
-            )
-            .unwrap();
-        world.step_n(5, 0.01).unwrap();
-        group.bench_function(format!("{n}x{n}/two_corners/newton"), |b| {
-            b.iter(|| black_box(world.step(black_box(0.01)).unwrap()));
+    for n in [100, 300] {
+        let scene = scenes::corner().resized(n, n).unwrap();
+        let (mut world, _) = scene.build().unwrap();
+        world.params_mut().max_iterations = 50;
+        world.step_n(5, scene.dt).unwrap();
+        group.bench_function(format!("{n}x{n}/corner/newton"), |b| {
+            b.iter(|| black_box(world.step(black_box(scene.dt)).unwrap()));
         });
     }
     group.finish();
