@@ -132,11 +132,21 @@
 //! With these choices (refactor ratio 0.3, up to [`MAX_INCREASES`]
 //! non-monotone full steps), the 30 × 30 reference scenes (3 s, h = 0.01)
 //! hold 1e-4 at every step, on one thread: `corner` 2.6 iterations and
-//! 1.16 factorisations per step (0.49 s, 6.1× real time), `two-corners` 2.0
-//! and 0.46 (0.26 s, 11.6×), `drape` 2.5 and 0.93 (0.48 s, 6.3×); see
+//! 1.16 factorisations per step (0.49 s, 6.0× real time), `two-corners` 2.0
+//! and 0.46 (0.26 s, 11×), `drape` 2.5 and 0.93 (0.49 s, 6.0×); see
 //! `examples/scene_timing.rs` and `modelgap cloth bench`. Factorisations
 //! are about 60 % of the time. On `corner` most of them fall in the snaps,
 //! where even fresh Newton steps converge slowly.
+//!
+//! Meshes beyond the reference scenes (1 s, one thread): `corner` with
+//! shear edges (3422 constraints on 2697 degrees of freedom) 50 iterations
+//! per step, 4 steps of 100 unconverged (largest stretch 1.5e-4), 9 s; with
+//! shear and bend edges (a nearly rigid sheet) 5.2 iterations, 1.5 s; a
+//! 25 × 25 cloth dropped on a tilted box above a floor (friction 0.5 and
+//! 0.2, 2 s) 76 iterations per step, 8 of 200 steps unconverged, 6 s.
+//! Over-constrained meshes and many changing contacts are where Newton is
+//! slow; the saddle-point solver before took 81 / 5.2 / 103 iterations per
+//! step there, and 69 / 17 / 22 s.
 //!
 //! Tried and dropped, measured on the same scenes: the saddle-point
 //! matrix itself (`LDLᵀ`, 3.5 ms or 2 ms a factorisation, above); GMRES
@@ -197,6 +207,19 @@ pub const CONTACT_STIFFNESS: f64 = 1e6;
 /// spring rather than a constant force: the regularisation of Coulomb's
 /// law that lets a particle stick (it creeps by at most this much per step).
 pub const FRICTION_SLIP: f64 = 1e-6;
+
+/// A step starts from the free preview instead of the preview plus last
+/// step's correction when the merit there is this many times lower
+/// (dimensionless). The correction cut `drape`'s factorisations from 2.9 to
+/// 0.93 per step. On a mesh with more constraints than degrees of freedom
+/// (shear edges: both diagonals of every quad) the impulses are not unique
+/// and carry self-stress (`Jᵀμ = 0`) that grows from step to step; there
+/// the corrected start's merit grew to 10⁵ and Newton needed 523 iterations
+/// per step (160 with this ratio), so such a mesh always starts from the
+/// preview (50 iterations per step; 81 before the correction existed). This
+/// ratio guards the same where self-stress is local (2 to 10 measured
+/// alike).
+pub const START_MERIT_RATIO: f64 = 3.0;
 
 /// Halvings of a Newton step tried before the iteration gives up on it.
 pub const MAX_HALVINGS: usize = 8;
@@ -498,27 +521,44 @@ impl NewtonSolver {
             Some(scale) => {
                 // Warm start: last step's contacts stay active (evaluate
                 // projects them onto their surfaces and the iteration
-                // releases those that pull), and every particle starts from
-                // its preview plus last step's correction `x − x̃`, which
-                // scales with the step squared. A cloth at rest starts at
-                // rest, and a swinging one with the centripetal pull of the
-                // last step already applied.
+                // releases those that pull), and the particles start from
+                // their preview plus last step's correction `x − x̃`, which
+                // scales with the step squared: a cloth at rest then starts
+                // at rest, and a swinging one with the centripetal pull of
+                // the last step already applied. From the preview alone
+                // when the merit there is START_MERIT_RATIO times lower, and
+                // always on a mesh with more constraints than degrees of
+                // freedom (see START_MERIT_RATIO).
                 let n_colliders = input.colliders.len();
-                for (i, ct) in self.cur.contact.iter_mut().enumerate() {
+                for ct in &mut self.cur.contact {
                     if ct.collider as usize >= n_colliders {
                         ct.active = false;
                     }
-                    if input.inv_mass[i] > 0.0 {
-                        self.cur.x[i] += self.last_correction[i] * scale;
+                }
+                let (cur, trial) = (&mut self.cur, &mut self.trial);
+                trial.x.copy_from_slice(&cur.x);
+                trial.mu.copy_from_slice(&cur.mu);
+                trial.r.copy_from_slice(&cur.r);
+                trial.contact.copy_from_slice(&cur.contact);
+                if self.n_constraints <= self.dim {
+                    for (i, x) in cur.x.iter_mut().enumerate() {
+                        if input.inv_mass[i] > 0.0 {
+                            *x += self.last_correction[i] * scale;
+                        }
                     }
+                }
+                evaluate(trial, input, self.mean_rest);
+                evaluate(cur, input, self.mean_rest);
+                if cur.merit > START_MERIT_RATIO * trial.merit {
+                    std::mem::swap(cur, trial);
                 }
             }
             None => {
                 self.cur.r.fill(Vector3::zeros());
                 self.cur.contact.fill(Contact::default());
+                evaluate(&mut self.cur, input, self.mean_rest);
             }
         }
-        evaluate(&mut self.cur, input, self.mean_rest);
         let mut need_refactor = false;
         let mut increases_left = MAX_INCREASES;
         loop {
