@@ -29,7 +29,7 @@ use serde_json::{Value, json};
 use super::BadInput;
 use super::compare::CompareArgs;
 use super::explain::ExplainArgs;
-use super::fix::{FixArgs, check_out, checked_pick, effect_line, picked};
+use super::fix::{Addition, FixArgs, check_out, checked_pick, effect_line, what_to_add};
 use super::report::{
     HoldArg, LoopArgs, args_text, args_text_with_model, explanation_json, json_text, print_notes,
     report_line, run_explain_model,
@@ -501,42 +501,14 @@ pub fn fix_command(args: &FixArgs, scene_path: &Path) -> anyhow::Result<()> {
         ex.ranked.len()
     );
     out.push_str(&explanation_text(&ex, args.top));
-    let (added, shown, verdict) = match &pick {
-        None => (ex.chosen.clone(), ex.clone(), None),
-        Some(p) => {
-            let (rank, r) = picked(&ex, p)?;
-            if let Some(e) = &r.error {
-                anyhow::bail!(
-                    "the fit of {} (--effect {}) failed, so it cannot be added: {e}",
-                    r.candidate.name,
-                    args.effect.as_deref().unwrap_or_default()
-                );
-            }
-            let mut shown = ex.clone();
-            shown.chosen = vec![r.clone()];
-            let verdict = format!(
-                "Added by hand (--effect): {}, ranked {rank} of {}. explain's own verdict: {}",
-                r.candidate.name,
-                ex.ranked.len(),
-                modelgap::story::verdict_sentence(&ex)
-            );
-            (vec![r.clone()], shown, Some(verdict))
-        }
-    };
-    if added.is_empty() {
-        out.push_str(&format!(
-            "\nnothing to add ({}): {} not written\n",
-            ex.verdict,
-            args.out.display()
-        ));
+    let Some(Addition {
+        added,
+        shown,
+        verdict,
+    }) = what_to_add(&ex, pick.as_ref(), args, &mut out)?
+    else {
         return super::print(&out);
-    }
-    if pick.is_none() && ex.verdict == Verdict::Partial {
-        out.push_str(
-            "\nnote: a partial explanation: the effect below lowers the error but does not \
-             reach the noise floor\n",
-        );
-    }
+    };
     let effects: Vec<Effect> = added.iter().map(RankedCandidate::effect).collect();
     let fixed = loaded
         .model

@@ -27,8 +27,8 @@ use modelgap::story::{comparison_text, explanation_text};
 use modelgap::{Effect, Model as _, RankedCandidate, Recording};
 
 use modelgap::cloth::hidden::{
-    Hidden as ClothHidden, HiddenCase as ClothCase, RecordingOptions, SWING_AMPLITUDE,
-    SWING_FREQUENCY, cases as cloth_cases,
+    HiddenCase as ClothCase, RecordingOptions, SWING_AMPLITUDE, SWING_FREQUENCY,
+    cases as cloth_cases,
 };
 use modelgap::cloth::markers::read_markers_csv;
 use modelgap::cloth::report::{
@@ -198,7 +198,15 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         }
         out.push_str("   error before → after:\n");
         out.push_str(&indent(&before_after_text(&before, &after)));
-        out.push_str(&truth_text(&case, &ex.chosen));
+        let hidden = case
+            .hidden
+            .iter()
+            .map(|h| (h.id.as_str(), h.values.as_slice()));
+        out.push_str(&truth_text(
+            hidden,
+            &ex.chosen,
+            "examples/make_demo_data.rs",
+        ));
         Some(after)
     };
 
@@ -312,7 +320,15 @@ fn cloth_story(dir: &Path) -> anyhow::Result<()> {
                 &cloth_before,
                 cloth_after,
             )));
-            out.push_str(&cloth_truth_text(&case.hidden, &ex.chosen));
+            let hidden = case
+                .hidden
+                .iter()
+                .map(|h| (h.id.as_str(), h.values.as_slice()));
+            out.push_str(&truth_text(
+                hidden,
+                &ex.chosen,
+                "examples/make_cloth_demo_data.rs",
+            ));
         }
     }
     let page = write_cloth_report(
@@ -337,21 +353,25 @@ fn cloth_story(dir: &Path) -> anyhow::Result<()> {
     super::print(&out)
 }
 
-/// The cloth truth beside what was found.
-fn cloth_truth_text(hidden: &[ClothHidden], chosen: &[RankedCandidate]) -> String {
+/// The hidden truth beside what was found: each hidden candidate as
+/// `(id, true values)`, and the example (`maker`) that made the recording.
+fn truth_text<'a>(
+    hidden: impl IntoIterator<Item = (&'a str, &'a [f64])>,
+    chosen: &[RankedCandidate],
+    maker: &str,
+) -> String {
     let mut s = String::new();
-    for h in hidden {
+    for (id, values) in hidden {
         let Some(found) = chosen
             .iter()
-            .find(|c| c.candidate.id == h.id || c.equivalent.contains(&h.id))
+            .find(|c| c.candidate.id == id || c.equivalent.iter().any(|e| e == id))
         else {
             s.push_str(&format!(
-                "   The recording was made with {} = {:?} hidden in it: explain did not choose it.\n",
-                h.id, h.values
+                "   The recording was made with {id} = {values:?} hidden in it: explain did not choose it.\n"
             ));
             continue;
         };
-        for (p, truth) in found.params.iter().zip(&h.values) {
+        for (p, truth) in found.params.iter().zip(values) {
             let uncertainty = if p.std_error.is_finite() {
                 format!(" ± {}", num(p.std_error))
             } else {
@@ -359,40 +379,7 @@ fn cloth_truth_text(hidden: &[ClothHidden], chosen: &[RankedCandidate]) -> Strin
             };
             let unit = unit_suffix(&p.unit);
             s.push_str(&format!(
-                "   The truth hidden in the recording (examples/make_cloth_demo_data.rs): {} = {}{unit};\n   \
-                 explain, not told it, found {}{uncertainty}{unit}.\n",
-                p.name,
-                num(*truth),
-                num(p.value),
-            ));
-        }
-    }
-    s
-}
-
-/// The hidden truth beside what was found, for the candidates that were hidden.
-fn truth_text(case: &HiddenCase, chosen: &[RankedCandidate]) -> String {
-    let mut s = String::new();
-    for h in &case.hidden {
-        let found = chosen
-            .iter()
-            .find(|c| c.candidate.id == h.id || c.equivalent.contains(&h.id));
-        let Some(found) = found else {
-            s.push_str(&format!(
-                "   The recording was made with {} = {:?} hidden in it: explain did not choose it.\n",
-                h.id, h.values
-            ));
-            continue;
-        };
-        for (p, truth) in found.params.iter().zip(&h.values) {
-            let uncertainty = if p.std_error.is_finite() {
-                format!(" ± {}", num(p.std_error))
-            } else {
-                String::new()
-            };
-            let unit = unit_suffix(&p.unit);
-            s.push_str(&format!(
-                "   The truth hidden in the recording (examples/make_demo_data.rs): {} = {}{unit};\n   \
+                "   The truth hidden in the recording ({maker}): {} = {}{unit};\n   \
                  explain, not told it, found {}{uncertainty}{unit}.\n",
                 p.name,
                 num(*truth),

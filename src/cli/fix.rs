@@ -120,43 +120,14 @@ pub fn run(args: &FixArgs) -> anyhow::Result<()> {
     );
     out.push_str(&explanation_text(&ex, args.top));
 
-    // What to add: explain's choice, or the user's pick.
-    let (added, shown, verdict_override) = match &pick {
-        None => (ex.chosen.clone(), ex.clone(), None),
-        Some(p) => {
-            let (rank, r) = picked(&ex, p)?;
-            if let Some(e) = &r.error {
-                anyhow::bail!(
-                    "the fit of {} (--effect {}) failed, so it cannot be added: {e}",
-                    r.candidate.name,
-                    args.effect.as_deref().unwrap_or_default()
-                );
-            }
-            let mut shown = ex.clone();
-            shown.chosen = vec![r.clone()];
-            let verdict = format!(
-                "Added by hand (--effect): {}, ranked {rank} of {}. explain's own verdict: {}",
-                r.candidate.name,
-                ex.ranked.len(),
-                verdict_sentence(&ex)
-            );
-            (vec![r.clone()], shown, Some(verdict))
-        }
-    };
-    if added.is_empty() {
-        out.push_str(&format!(
-            "\nnothing to add ({}): {} not written\n",
-            ex.verdict,
-            args.out.display()
-        ));
+    let Some(Addition {
+        added,
+        shown,
+        verdict: verdict_override,
+    }) = what_to_add(&ex, pick.as_ref(), args, &mut out)?
+    else {
         return super::print(&out);
-    }
-    if pick.is_none() && ex.verdict == Verdict::Partial {
-        out.push_str(
-            "\nnote: a partial explanation: the effect below lowers the error but does not \
-             reach the noise floor\n",
-        );
-    }
+    };
     let effects: Vec<Effect> = added.iter().map(RankedCandidate::effect).collect();
     let fixed = loaded
         .model
@@ -240,6 +211,76 @@ pub(super) fn picked<'a>(
         ))
         .into()
     })
+}
+
+/// What fix adds (see [`what_to_add`]).
+pub(super) struct Addition {
+    /// The effects to build into the model.
+    pub(super) added: Vec<RankedCandidate>,
+    /// The explanation as the report shows it (a pick as its choice).
+    pub(super) shown: Explanation,
+    /// For a pick, the verdict sentence that replaces explain's.
+    pub(super) verdict: Option<String>,
+}
+
+/// What fix adds: explain's choice, or the user's `--effect` pick; with the
+/// explanation as the report shows it (the pick as its choice) and, for a
+/// pick, the verdict sentence that replaces explain's. `None` when there is
+/// nothing to add, said in `out`, as is a partial explanation's note.
+/// Shared by bond-graph and cloth `fix`.
+///
+/// # Errors
+///
+/// [`BadInput`] when the pick is not in the ranking; an error when its fit
+/// failed.
+pub(super) fn what_to_add(
+    ex: &Explanation,
+    pick: Option<&Pick>,
+    args: &FixArgs,
+    out: &mut String,
+) -> anyhow::Result<Option<Addition>> {
+    let Some(p) = pick else {
+        if ex.chosen.is_empty() {
+            out.push_str(&format!(
+                "\nnothing to add ({}): {} not written\n",
+                ex.verdict,
+                args.out.display()
+            ));
+            return Ok(None);
+        }
+        if ex.verdict == Verdict::Partial {
+            out.push_str(
+                "\nnote: a partial explanation: the effect below lowers the error but does not \
+                 reach the noise floor\n",
+            );
+        }
+        return Ok(Some(Addition {
+            added: ex.chosen.clone(),
+            shown: ex.clone(),
+            verdict: None,
+        }));
+    };
+    let (rank, r) = picked(ex, p)?;
+    if let Some(e) = &r.error {
+        anyhow::bail!(
+            "the fit of {} (--effect {}) failed, so it cannot be added: {e}",
+            r.candidate.name,
+            args.effect.as_deref().unwrap_or_default()
+        );
+    }
+    let mut shown = ex.clone();
+    shown.chosen = vec![r.clone()];
+    let verdict = format!(
+        "Added by hand (--effect): {}, ranked {rank} of {}. explain's own verdict: {}",
+        r.candidate.name,
+        ex.ranked.len(),
+        verdict_sentence(ex)
+    );
+    Ok(Some(Addition {
+        added: vec![r.clone()],
+        shown,
+        verdict: Some(verdict),
+    }))
 }
 
 /// A fitted effect in one line: name, where it acts, parameters ± standard error.

@@ -536,21 +536,23 @@ impl NewtonSolver {
                     }
                 }
                 let (cur, trial) = (&mut self.cur, &mut self.trial);
-                trial.x.copy_from_slice(&cur.x);
-                trial.mu.copy_from_slice(&cur.mu);
-                trial.r.copy_from_slice(&cur.r);
-                trial.contact.copy_from_slice(&cur.contact);
                 if self.n_constraints <= self.dim {
+                    trial.x.copy_from_slice(&cur.x);
+                    trial.mu.copy_from_slice(&cur.mu);
+                    trial.r.copy_from_slice(&cur.r);
+                    trial.contact.copy_from_slice(&cur.contact);
                     for (i, x) in cur.x.iter_mut().enumerate() {
                         if input.inv_mass[i] > 0.0 {
                             *x += self.last_correction[i] * scale;
                         }
                     }
-                }
-                evaluate(trial, input, self.mean_rest);
-                evaluate(cur, input, self.mean_rest);
-                if cur.merit > START_MERIT_RATIO * trial.merit {
-                    std::mem::swap(cur, trial);
+                    evaluate(trial, input, self.mean_rest);
+                    evaluate(cur, input, self.mean_rest);
+                    if cur.merit > START_MERIT_RATIO * trial.merit {
+                        std::mem::swap(cur, trial);
+                    }
+                } else {
+                    evaluate(cur, input, self.mean_rest);
                 }
             }
             None => {

@@ -74,6 +74,22 @@ impl ParticleSet {
     }
 }
 
+/// Which particles are static (inverse mass 0), as a structure built on
+/// them (a colouring, a strip decomposition) remembers them.
+pub(crate) fn statics(inv_mass: &[f64]) -> Vec<bool> {
+    inv_mass.iter().map(|&k| k == 0.0).collect()
+}
+
+/// Whether `is_static` (from [`statics`]) still describes these inverse
+/// masses: the same number of particles, the same ones static.
+pub(crate) fn same_statics(is_static: &[bool], inv_mass: &[f64]) -> bool {
+    is_static.len() == inv_mass.len()
+        && is_static
+            .iter()
+            .zip(inv_mass)
+            .all(|(&s, &k)| s == (k == 0.0))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

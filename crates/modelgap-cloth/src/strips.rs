@@ -161,7 +161,7 @@ impl StripDecomposition {
             });
         }
         constraints.check_particles(n)?;
-        let is_static: Vec<bool> = inv_mass.iter().map(|&k| k == 0.0).collect();
+        let is_static = crate::particles::statics(inv_mass);
         let ends = |i: usize| [constraints.a[i] as usize, constraints.b[i] as usize];
 
         // The constraints at each particle, ascending (compressed rows).
@@ -299,12 +299,7 @@ impl StripDecomposition {
     #[must_use]
     pub fn fits(&self, constraints: &DistanceConstraints, inv_mass: &[f64]) -> bool {
         self.constraints.len() == constraints.len()
-            && self.is_static.len() == inv_mass.len()
-            && self
-                .is_static
-                .iter()
-                .zip(inv_mass)
-                .all(|(&s, &k)| s == (k == 0.0))
+            && crate::particles::same_statics(&self.is_static, inv_mass)
     }
 }
 
