@@ -55,6 +55,15 @@ pub struct RecordingOptions {
     pub rho: f64,
     /// Time constant of the sensors' first-order lag (s). Default 50 µs.
     pub sensor_lag: f64,
+    /// Quantisation step of every measured output (an ADC's or encoder's
+    /// resolution), as a fraction of the output's largest absolute value;
+    /// 0 (the default) for none.
+    pub quantisation: f64,
+    /// Outputs whose sensor is dead: they read 0 throughout.
+    pub dead: Vec<String>,
+    /// The time column is written in these units per second (1000: ms, as a
+    /// logger may write it); 1 (the default) for seconds.
+    pub time_units_per_second: f64,
     /// Noise seed.
     pub seed: u64,
 }
@@ -68,6 +77,9 @@ impl Default for RecordingOptions {
             coloured: 0.001,
             rho: 0.9,
             sensor_lag: 50e-6,
+            quantisation: 0.0,
+            dead: Vec::new(),
+            time_units_per_second: 1.0,
             seed: 1,
         }
     }
@@ -228,6 +240,8 @@ pub fn record(case: &HiddenCase, opts: &RecordingOptions) -> Result<Recording> {
             continue; // the buck case measures i and omega, as the paper does
         }
         let size = y.iter().fold(0.0_f64, |m, v| m.max(v.abs())).max(1e-12);
+        let step = opts.quantisation * size;
+        let dead = opts.dead.contains(name);
         let mut lagged = y[0];
         let mut coloured = 0.0;
         let values = y
@@ -236,7 +250,14 @@ pub fn record(case: &HiddenCase, opts: &RecordingOptions) -> Result<Recording> {
                 lagged = a * lagged + (1.0 - a) * v;
                 coloured =
                     opts.rho * coloured + (1.0 - opts.rho * opts.rho).sqrt() * gauss.sample();
-                lagged + size * (opts.white * gauss.sample() + opts.coloured * coloured)
+                let read = lagged + size * (opts.white * gauss.sample() + opts.coloured * coloured);
+                if dead {
+                    0.0
+                } else if step > 0.0 {
+                    (read / step).round() * step
+                } else {
+                    read
+                }
             })
             .collect();
         signals.push(Signal {
@@ -244,5 +265,6 @@ pub fn record(case: &HiddenCase, opts: &RecordingOptions) -> Result<Recording> {
             values,
         });
     }
+    let t = t.iter().map(|t| t * opts.time_units_per_second).collect();
     Ok(Recording::new(t, signals)?)
 }

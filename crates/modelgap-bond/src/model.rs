@@ -373,6 +373,38 @@ impl Model for BondModel {
             .unwrap_or_default()
     }
 
+    fn inputs(&self) -> Vec<String> {
+        self.graph.inputs().keys().cloned().collect()
+    }
+
+    /// `1 / |λ|` of every mode of the model linearised where predictions
+    /// start (at rest, or at the steady state), under the recording's first
+    /// inputs; pure integrators (λ = 0) and modes the linearisation cannot
+    /// evaluate are left out.
+    fn time_constants(&self, rec: &Recording) -> Vec<f64> {
+        let Ok(model) = CompiledModel::new(&self.graph) else {
+            return Vec::new();
+        };
+        let u0 = first_inputs(&model, rec);
+        let x0 = match self.start {
+            Start::Rest => vec![0.0; model.n_states()],
+            Start::SteadyState => match steady_start(&self.graph, &model, rec, None) {
+                Ok(x) => x,
+                Err(_) => return Vec::new(),
+            },
+        };
+        let ss = crate::state_space::StateSpace::of_compiled(&model, Some(&x0), Some(&u0));
+        if ss.a.iter().any(|v| !v.is_finite()) {
+            return Vec::new();
+        }
+        ss.modes()
+            .iter()
+            .map(|m| m.eigenvalue.norm())
+            .filter(|l| l.is_finite() && *l > 1e-12)
+            .map(|l| 1.0 / l)
+            .collect()
+    }
+
     fn predict_with(
         &self,
         rec: &Recording,

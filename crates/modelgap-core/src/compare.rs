@@ -10,7 +10,7 @@ use crate::model::{Model, Prediction};
 use crate::recording::Recording;
 use crate::residual::{
     FailureWindow, ResidualStats, effective_sample_size, estimate_noise_sigma, failure_windows,
-    stats,
+    quantisation_step, stats,
 };
 
 /// Options of [`compare`].
@@ -65,6 +65,10 @@ pub struct OutputComparison {
     pub noise_floor: f64,
     /// True when the floor was given by the user, false when estimated.
     pub noise_given: bool,
+    /// The measurement's quantisation step, when it lies on a lattice (its
+    /// rounding error is part of the floor).
+    #[serde(default)]
+    pub quantum: Option<f64>,
     /// The band the residual must leave to count as failure (the noise
     /// band; with a predictability band, sample k's band is this plus the
     /// model's spread at k, see [`compare_prediction_with_spread`]).
@@ -104,16 +108,43 @@ impl Comparison {
     }
 }
 
+/// A measurement's noise floor and how it was found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Floor {
+    /// The floor: the RMS a perfect model would leave (σ), in the output's unit.
+    pub sigma: f64,
+    /// Whether the user gave it.
+    pub given: bool,
+    /// The quantisation step of the measurement, when it is quantised
+    /// ([`quantisation_step`]).
+    pub quantum: Option<f64>,
+}
+
 /// The noise floor of a measurement: given by the user, or estimated from
-/// its high-frequency part (what no smooth model can follow). Never 0: a
-/// noise-free signal gets a floor of 1e-9 of its RMS (so weights stay finite).
-pub fn noise_floor(name: &str, measured: &[f64], given: &BTreeMap<String, f64>) -> (f64, bool) {
-    if let Some(&s) = given.get(name) {
-        return (s, true);
+/// its high-frequency part (what no smooth model can follow) and, for a
+/// quantised signal ([`quantisation_step`]), its rounding error `step/√12`
+/// added in quadrature. Never 0: a noise-free signal gets a floor of 1e-9
+/// of its RMS (so weights stay finite).
+pub fn noise_floor(name: &str, measured: &[f64], given: &BTreeMap<String, f64>) -> Floor {
+    let quantum = quantisation_step(measured);
+    if let Some(&sigma) = given.get(name) {
+        return Floor {
+            sigma,
+            given: true,
+            quantum,
+        };
     }
     let sigma = estimate_noise_sigma(measured);
+    let rounding = quantum.map_or(0.0, |q| q / 12f64.sqrt());
     let size = crate::residual::rms(measured);
-    (sigma.max(1e-9 * size).max(f64::MIN_POSITIVE), false)
+    Floor {
+        sigma: sigma
+            .hypot(rounding)
+            .max(1e-9 * size)
+            .max(f64::MIN_POSITIVE),
+        given: false,
+        quantum,
+    }
 }
 
 /// The outputs a prediction and a recording share, in the model's order.
@@ -207,7 +238,11 @@ pub fn compare_prediction_with_spread(
             .zip(&predicted)
             .map(|(m, p)| m - p)
             .collect();
-        let (floor, given) = noise_floor(&name, &measured, &opts.noise);
+        let Floor {
+            sigma: floor,
+            given,
+            quantum,
+        } = noise_floor(&name, &measured, &opts.noise);
         let band = match opts.band_fraction {
             Some(f) => f * crate::residual::steady_state(&predicted).abs(),
             None => opts.band_sigmas * floor,
@@ -233,6 +268,7 @@ pub fn compare_prediction_with_spread(
             residual,
             noise_floor: floor,
             noise_given: given,
+            quantum,
             band,
             windows,
         });

@@ -25,10 +25,12 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::compare::{CompareOptions, noise_floor, shared_outputs};
+use crate::compare::{CompareOptions, Floor, noise_floor, shared_outputs};
 use crate::effect::{Candidate, Effect};
 use crate::error::{CoreError, Result};
 use crate::fit::{Cancel, FitOptions, FitReport, ResidualProblem, Termination, fit};
+pub use crate::judge::{FEW_OUTPUTS, at_noise_floor};
+use crate::judge::{JudgeOptions, Judgement, all_at_floor, judge_residual, recording_findings};
 use crate::model::Model;
 use crate::recording::Recording;
 use crate::residual::{FailureWindow, failure_windows, rms};
@@ -101,7 +103,9 @@ impl std::fmt::Debug for ExplainOptions {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Verdict {
-    /// The residual is what noise leaves: no effect is missing.
+    /// The residual is what noise leaves: no effect is missing. Given only
+    /// when every output's residual passes the judge ([`crate::judge`]): at
+    /// its floor, no failure window, uncorrelated with the inputs, unbiased.
     NothingMissing,
     /// One effect explains the recording down to the noise floor.
     EffectFound,
@@ -110,6 +114,15 @@ pub enum Verdict {
     /// The best effects help but leave a residual above the floor: the true
     /// effect is probably not on the menu.
     Partial,
+    /// The model fails (the residual is not what noise leaves) and no
+    /// candidate effect explains any of it significantly.
+    Unexplained,
+    /// The recording cannot be judged: too few samples, no output that
+    /// moves, a time base on which the model's dynamics cannot be seen, or
+    /// every candidate fit failing. [`Explanation::reasons`] says which.
+    CannotJudge,
+    /// The run was stopped (Ctrl-C) before a verdict: no effect is chosen.
+    Interrupted,
 }
 
 impl std::fmt::Display for Verdict {
@@ -119,6 +132,9 @@ impl std::fmt::Display for Verdict {
             Verdict::EffectFound => "effect-found",
             Verdict::TwoEffects => "two-effects",
             Verdict::Partial => "partial",
+            Verdict::Unexplained => "unexplained",
+            Verdict::CannotJudge => "cannot-judge",
+            Verdict::Interrupted => "interrupted",
         })
     }
 }
@@ -188,6 +204,10 @@ pub struct OutputSummary {
     pub rms_after: f64,
     /// Where the residual after the chosen effects still leaves a 4σ band.
     pub remaining_windows: Vec<FailureWindow>,
+    /// The judge's reading of the residual after the chosen effects (none
+    /// when the recording cannot be judged).
+    #[serde(default)]
+    pub judgement: Option<Judgement>,
 }
 
 /// The result of [`explain`].
@@ -211,6 +231,12 @@ pub struct Explanation {
     pub cost_before: f64,
     /// Non-fatal findings.
     pub warnings: Vec<String>,
+    /// Why the verdict is what it is, when it is not "nothing is missing"
+    /// or a complete explanation: what keeps the recording from being
+    /// judged, which output's residual is not noise and how, or how far an
+    /// interrupted run got.
+    #[serde(default)]
+    pub reasons: Vec<String>,
 }
 
 impl Explanation {
@@ -227,6 +253,8 @@ struct Target<'a> {
     names: Vec<String>,
     measured: Vec<&'a [f64]>,
     sigma: Vec<f64>,
+    /// How each floor was found.
+    floors: Vec<Floor>,
 }
 
 impl Target<'_> {
@@ -705,6 +733,15 @@ fn kind_rank(k: crate::effect::EffectKind) -> u8 {
 
 /// Explains what the model is missing on this recording.
 ///
+/// Before any fit, the recording is checked ([`recording_findings`]): too
+/// few samples, or samples too far apart (or too short a recording) to see
+/// the model's time constants, give [`Verdict::CannotJudge`] with the
+/// reason; an output that reads a constant throughout (a dead sensor) is
+/// left out with a warning, and when none is left the verdict is
+/// [`Verdict::CannotJudge`] too. When the [`ExplainOptions::cancel`] flag is
+/// set, the fits stop and the verdict is [`Verdict::Interrupted`], with only
+/// the fits that finished ranked.
+///
 /// # Errors
 /// [`CoreError::InvalidArgument`] for bad options or a recording that shares
 /// no output with the model; the model's errors if even the model as given
@@ -720,25 +757,52 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             reason: format!("must be at least 1, found {}", opts.floor_factor),
         });
     }
-    let names = shared_outputs(model, rec)?;
+    let shared = shared_outputs(model, rec)?;
+    let shared_values: Vec<(&str, &[f64])> = shared
+        .iter()
+        .map(|n| Ok((n.as_str(), rec.values(n)?)))
+        .collect::<Result<_>>()?;
+    let findings = recording_findings(rec.t(), &shared_values, &model.time_constants(rec));
+    let mut warnings = Vec::new();
+    let mut blocking = Vec::new();
+    for f in &findings {
+        match &f.output {
+            Some(_) => warnings.push(format!("{}: left out of the verdict", f.message)),
+            None => blocking.push(f.message.clone()),
+        }
+    }
+    let names: Vec<String> = shared
+        .iter()
+        .filter(|n| !findings.iter().any(|f| f.output.as_ref() == Some(*n)))
+        .cloned()
+        .collect();
+    if names.is_empty() {
+        blocking.push("no measured output varies: there is nothing to judge the model by".into());
+    }
+    if !blocking.is_empty() {
+        return cannot_judge(model, rec, &shared, opts, blocking, warnings);
+    }
     let measured: Vec<&[f64]> = names.iter().map(|n| rec.values(n)).collect::<Result<_>>()?;
-    let sigma: Vec<f64> = names
+    let floors: Vec<Floor> = names
         .iter()
         .zip(&measured)
-        .map(|(n, m)| noise_floor(n, m, &opts.noise).0)
+        .map(|(n, m)| noise_floor(n, m, &opts.noise))
         .collect();
     let target = Target {
         model,
         rec,
         names: names.clone(),
         measured,
-        sigma,
+        sigma: floors.iter().map(|f| f.sigma).collect(),
+        floors,
     };
     let n = target.n_residuals();
     let mut base_weighted = vec![0.0; n];
     target.residuals(&[], &mut base_weighted)?;
     let cost_before = 0.5 * base_weighted.iter().map(|r| r * r).sum::<f64>();
     let rms_before = target.rms_per_output(&base_weighted);
+    let judge = Judge::new(&target, opts);
+    let judged_before = judge.judge(&base_weighted);
 
     // Fit every candidate, in parallel.
     let candidates: Vec<Candidate> = model
@@ -748,16 +812,29 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         .collect();
     let total = candidates.len();
     let done = AtomicUsize::new(0);
-    let fitted: Vec<Fitted> = candidates
+    let cancelled = || opts.cancel.as_deref().is_some_and(Cancel::is_cancelled);
+    let fitted: Vec<(Fitted, bool)> = candidates
         .par_iter()
         .map(|c| {
             let f = fit_candidate(&target, &[], c, opts);
+            // A fit stopped by the flag (or whose grid was) did not finish.
+            let stopped = f
+                .report
+                .as_ref()
+                .is_some_and(|r| r.termination == Termination::Cancelled)
+                || (f.error.is_some() && cancelled());
             let d = done.fetch_add(1, Ordering::Relaxed) + 1;
             if let Some(p) = &opts.progress {
                 p(d, total);
             }
-            f
+            (f, !stopped)
         })
+        .collect();
+    let interrupted = cancelled();
+    let fitted: Vec<Fitted> = fitted
+        .into_iter()
+        .filter(|(_, finished)| *finished || !interrupted)
+        .map(|(f, _)| f)
         .collect();
     // Effective sample size from the best fit's residual (or the model's own
     // residual when nothing fits better): what noise alone looks like.
@@ -779,16 +856,145 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         .iter()
         .map(|f| ranked(&target, f, &white, n_eff, n))
         .collect();
+    order_ranking(&mut ranking, opts.significance);
+    let margin = match (ranking.first(), ranking.get(1)) {
+        (Some(a), Some(b)) if b.score.is_finite() => a.score - b.score,
+        (Some(a), _) => a.score,
+        _ => 0.0,
+    };
+    for r in ranking.iter().filter(|r| r.error.is_some()) {
+        warnings.push(format!(
+            "{}: fit failed: {}",
+            r.candidate.name,
+            r.error.as_deref().unwrap_or("")
+        ));
+    }
+    let summary = |after_weighted: &[f64], judged: Vec<Judgement>| {
+        output_summaries(&target, &rms_before, after_weighted, judged)
+    };
+    if interrupted {
+        let reasons = vec![format!(
+            "interrupted after {} of {total} candidate fits: no verdict (the ranking holds \
+             only the fits that finished)",
+            fitted.len()
+        )];
+        return Ok(Explanation {
+            model: model.name(),
+            verdict: Verdict::Interrupted,
+            outputs: summary(&base_weighted, judged_before),
+            ranked: ranking,
+            chosen: Vec::new(),
+            margin,
+            effective_samples: n_eff,
+            cost_before,
+            warnings,
+            reasons,
+        });
+    }
+
+    let mut chosen: Vec<RankedCandidate> = Vec::new();
+    let mut verdict;
+    let mut after_weighted = base_weighted.clone();
+    let mut judged_after = judged_before.clone();
+    let mut reasons = Vec::new();
+    // The first effect: the best candidate, if its evidence is significant
+    // and it lowers the error.
+    let best = ranking
+        .first()
+        .filter(|b| b.error.is_none() && b.score > opts.significance && b.cost < cost_before);
+    if all_at_floor(&judged_before, opts.floor_factor) {
+        // At the floor already: whatever a candidate gains is noise.
+        verdict = Verdict::NothingMissing;
+    } else if ranking.iter().all(|r| r.error.is_some()) {
+        verdict = if ranking.is_empty() {
+            reasons.push("the model offers no candidate effect to try".to_string());
+            Verdict::Unexplained
+        } else {
+            reasons.push(format!(
+                "every candidate fit failed ({} of them), the first with: {}",
+                ranking.len(),
+                ranking[0].error.as_deref().unwrap_or("")
+            ));
+            Verdict::CannotJudge
+        };
+    } else if let Some(best) = best {
+        chosen.push(best.clone());
+        verdict = Verdict::EffectFound;
+        if let Some(f) = fitted.iter().find(|f| f.candidate.id == best.candidate.id) {
+            after_weighted = f.weighted.clone();
+        }
+        judged_after = judge.judge(&after_weighted);
+        if !all_at_floor(&judged_after, opts.floor_factor) && opts.max_effects >= 2 {
+            let second = second_effect(&target, opts, &candidates, &fitted, best, &base_weighted);
+            if cancelled() {
+                let reasons = vec![
+                    "interrupted while fitting a second effect on top of the first: no verdict"
+                        .to_string(),
+                ];
+                return Ok(Explanation {
+                    model: model.name(),
+                    verdict: Verdict::Interrupted,
+                    outputs: summary(&base_weighted, judged_before),
+                    ranked: ranking,
+                    chosen: Vec::new(),
+                    margin,
+                    effective_samples: n_eff,
+                    cost_before,
+                    warnings,
+                    reasons,
+                });
+            }
+            if let Some((pair, weighted)) = second {
+                chosen = pair;
+                verdict = Verdict::TwoEffects;
+                after_weighted = weighted;
+                judged_after = judge.judge(&after_weighted);
+            }
+        }
+        if !all_at_floor(&judged_after, opts.floor_factor) {
+            verdict = Verdict::Partial;
+        }
+    } else {
+        verdict = Verdict::Unexplained;
+    }
+    if verdict != Verdict::NothingMissing {
+        for (name, j) in names.iter().zip(&judged_after) {
+            if !j.reasons.is_empty() {
+                reasons.push(format!("{name}: {}", j.reasons.join("; ")));
+            }
+        }
+    }
+    // Qualitative evidence for the top of the ranking (it costs a diagnosis each).
+    for r in ranking.iter_mut().take(5) {
+        r.qualitative = model.qualitative_agreement(rec, &r.candidate);
+    }
+    Ok(Explanation {
+        model: model.name(),
+        verdict,
+        outputs: summary(&after_weighted, judged_after),
+        ranked: ranking,
+        chosen,
+        margin,
+        effective_samples: n_eff,
+        cost_before,
+        warnings,
+        reasons,
+    })
+}
+
+/// Orders the ranking: by score; then Occam — a candidate with more
+/// parameters must beat a simpler one by the significance margin to rank
+/// above it (a flexible coupling can mimic an extra inertia plus a little
+/// sensor lag, a shade better but not significantly so); then, within a run
+/// of equivalent candidates (same cost, same number of parameters), the
+/// simplest change first; and each candidate lists its equivalents.
+fn order_ranking(ranking: &mut Vec<RankedCandidate>, significance: f64) {
     ranking.sort_by(|a, b| b.score.total_cmp(&a.score));
-    // Occam: a candidate with more parameters must beat a simpler one by the
-    // significance margin to rank above it (a flexible coupling can mimic an
-    // extra inertia plus a little sensor lag, a shade better but not
-    // significantly so).
     if let Some(best) = ranking.first().map(|r| r.score).filter(|s| s.is_finite()) {
         let simplest = ranking
             .iter()
             .enumerate()
-            .filter(|(_, r)| r.error.is_none() && r.score >= best - opts.significance)
+            .filter(|(_, r)| r.error.is_none() && r.score >= best - significance)
             .min_by(|(_, a), (_, b)| {
                 a.candidate
                     .params
@@ -804,8 +1010,6 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             ranking.insert(0, r);
         }
     }
-    // Within a run of equivalent candidates (same cost, same number of
-    // parameters), the simplest change first.
     let equivalent = |a: &RankedCandidate, b: &RankedCandidate| {
         a.error.is_none()
             && b.error.is_none()
@@ -829,7 +1033,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         .iter()
         .map(|r| (r.candidate.id.clone(), r.cost, r.candidate.params.len()))
         .collect();
-    for r in &mut ranking {
+    for r in ranking.iter_mut() {
         if r.error.is_some() {
             continue;
         }
@@ -843,169 +1047,243 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             .map(|(id, _, _)| id.clone())
             .collect();
     }
-    let margin = match (ranking.first(), ranking.get(1)) {
-        (Some(a), Some(b)) if b.score.is_finite() => a.score - b.score,
-        (Some(a), _) => a.score,
-        _ => 0.0,
-    };
-    let mut warnings = Vec::new();
-    for r in ranking.iter().filter(|r| r.error.is_some()) {
-        warnings.push(format!(
-            "{}: fit failed: {}",
-            r.candidate.name,
-            r.error.as_deref().unwrap_or("")
-        ));
-    }
-    let floor_ok = |rms: &[f64]| at_noise_floor(rms, &target.sigma, opts.floor_factor);
+}
 
-    let mut chosen: Vec<RankedCandidate> = Vec::new();
-    let mut verdict = Verdict::NothingMissing;
-    let mut after_weighted = base_weighted.clone();
-    // At the floor already: whatever a candidate gains is noise.
-    let at_floor = floor_ok(&rms_before);
-    if let Some(best) = ranking
-        .first()
-        .filter(|b| !at_floor && b.score > opts.significance && b.error.is_none())
-    {
-        chosen.push(best.clone());
-        verdict = Verdict::EffectFound;
-        if let Some(f) = fitted.iter().find(|f| f.candidate.id == best.candidate.id) {
-            after_weighted = f.weighted.clone();
-        }
-        if !floor_ok(&best.rms_after) && opts.max_effects >= 2 {
-            // A second effect on top of the first: fit each other candidate with
-            // the first's parameters free too (a joint fit, started from the first's).
-            let first = best.effect();
-            let others: Vec<&Candidate> = candidates
-                .iter()
-                .filter(|c| c.id != first.candidate.id)
-                .collect();
-            let first_c = prepared(&first.candidate, rec);
-            let pairs: Vec<(Fitted, Fitted)> = others
-                .par_iter()
-                .map(|c| {
-                    // Start the second from its best fit on top of the first
-                    // (grid starts included), then fit both jointly.
-                    let second = fit_candidate(&target, std::slice::from_ref(&first), c, opts);
-                    if second.error.is_some() {
-                        return (failed_clone(&second), second);
-                    }
-                    let start: Vec<f64> =
-                        first.values.iter().chain(&second.values).copied().collect();
-                    match fit_pair(&target, &first_c, &second.candidate, &start, opts) {
-                        Ok((report, weighted)) => {
-                            let (a, b) = report.params.split_at(first_c.params.len());
-                            let mut first_report = report.clone();
-                            first_report.params = a.to_vec();
-                            first_report.std_errors = report.std_errors[..a.len()].to_vec();
-                            let mut second_report = report.clone();
-                            second_report.params = b.to_vec();
-                            second_report.std_errors = report.std_errors[a.len()..].to_vec();
-                            let f1 = Fitted {
-                                candidate: first_c.clone(),
-                                values: a.to_vec(),
-                                report: Some(first_report),
-                                cost: report.cost_after,
-                                weighted: weighted.clone(),
-                                error: None,
-                            };
-                            let f2 = Fitted {
-                                candidate: second.candidate.clone(),
-                                values: b.to_vec(),
-                                report: Some(second_report),
-                                cost: report.cost_after,
-                                weighted,
-                                error: None,
-                            };
-                            (f1, f2)
-                        }
-                        Err(e) => {
-                            let mut f = failed_clone(&second);
-                            f.error = Some(e.to_string());
-                            (f, second)
-                        }
-                    }
-                })
-                .collect();
-            let best_pair = pairs
-                .iter()
-                .filter(|(a, b)| a.error.is_none() && b.error.is_none())
-                .min_by(|a, b| a.0.cost.total_cmp(&b.0.cost));
-            if let Some((joint_first, second)) = best_pair {
-                let n_eff2 = target.n_eff(&joint_first.weighted);
-                let rhos2 = target.rhos(&joint_first.weighted);
-                let k2 = second.candidate.params.len();
-                let single = fitted
-                    .iter()
-                    .find(|f| f.candidate.id == best.candidate.id)
-                    .map_or(&base_weighted, |f| &f.weighted);
-                let gain = score(
-                    target.whitened_cost(single, &rhos2),
-                    target.whitened_cost(&joint_first.weighted, &rhos2),
-                    k2,
-                    target.n_whitened(),
-                );
-                if gain > opts.significance {
-                    let white2 = Whitening {
-                        cost_before: target.whitened_cost(&base_weighted, &rhos2),
-                        rhos: rhos2,
+/// A second effect on top of `best`: every other candidate fitted jointly
+/// with it (both sets of parameters free, the second started from its own
+/// best fit on top of the first). Returns the pair, ranked, and the joint
+/// residual when the best pair's gain over `best` alone is significant.
+fn second_effect(
+    target: &Target,
+    opts: &ExplainOptions,
+    candidates: &[Candidate],
+    fitted: &[Fitted],
+    best: &RankedCandidate,
+    base_weighted: &[f64],
+) -> Option<(Vec<RankedCandidate>, Vec<f64>)> {
+    let n = target.n_residuals();
+    let first = best.effect();
+    let others: Vec<&Candidate> = candidates
+        .iter()
+        .filter(|c| c.id != first.candidate.id)
+        .collect();
+    let first_c = prepared(&first.candidate, target.rec);
+    let pairs: Vec<(Fitted, Fitted)> = others
+        .par_iter()
+        .map(|c| {
+            let second = fit_candidate(target, std::slice::from_ref(&first), c, opts);
+            if second.error.is_some() {
+                return (failed_clone(&second), second);
+            }
+            let start: Vec<f64> = first.values.iter().chain(&second.values).copied().collect();
+            match fit_pair(target, &first_c, &second.candidate, &start, opts) {
+                Ok((report, weighted)) => {
+                    let (a, b) = report.params.split_at(first_c.params.len());
+                    let mut first_report = report.clone();
+                    first_report.params = a.to_vec();
+                    first_report.std_errors = report.std_errors[..a.len()].to_vec();
+                    let mut second_report = report.clone();
+                    second_report.params = b.to_vec();
+                    second_report.std_errors = report.std_errors[a.len()..].to_vec();
+                    let f1 = Fitted {
+                        candidate: first_c.clone(),
+                        values: a.to_vec(),
+                        report: Some(first_report),
+                        cost: report.cost_after,
+                        weighted: weighted.clone(),
+                        error: None,
                     };
-                    let mut first_ranked = ranked(&target, joint_first, &white2, n_eff2, n);
-                    first_ranked.candidate = best.candidate.clone();
-                    let mut second_ranked = ranked(&target, second, &white2, n_eff2, n);
-                    second_ranked.score = gain;
-                    chosen = vec![first_ranked, second_ranked];
-                    verdict = Verdict::TwoEffects;
-                    after_weighted = joint_first.weighted.clone();
+                    let f2 = Fitted {
+                        candidate: second.candidate.clone(),
+                        values: b.to_vec(),
+                        report: Some(second_report),
+                        cost: report.cost_after,
+                        weighted,
+                        error: None,
+                    };
+                    (f1, f2)
+                }
+                Err(e) => {
+                    let mut f = failed_clone(&second);
+                    f.error = Some(e.to_string());
+                    (f, second)
                 }
             }
-        }
-        let rms_after = target.rms_per_output(&after_weighted);
-        if !floor_ok(&rms_after) {
-            verdict = Verdict::Partial;
-        }
+        })
+        .collect();
+    let (joint_first, second) = pairs
+        .iter()
+        .filter(|(a, b)| a.error.is_none() && b.error.is_none())
+        .min_by(|a, b| a.0.cost.total_cmp(&b.0.cost))?;
+    let n_eff2 = target.n_eff(&joint_first.weighted);
+    let rhos2 = target.rhos(&joint_first.weighted);
+    let k2 = second.candidate.params.len();
+    let single = fitted
+        .iter()
+        .find(|f| f.candidate.id == best.candidate.id)
+        .map_or(base_weighted, |f| &f.weighted);
+    let gain = score(
+        target.whitened_cost(single, &rhos2),
+        target.whitened_cost(&joint_first.weighted, &rhos2),
+        k2,
+        target.n_whitened(),
+    );
+    if gain <= opts.significance {
+        return None;
     }
-    // Qualitative evidence for the top of the ranking (it costs a diagnosis each).
-    for r in ranking.iter_mut().take(5) {
-        r.qualitative = model.qualitative_agreement(rec, &r.candidate);
-    }
-    let t = rec.t();
-    let dt = if t.len() > 1 {
-        (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64
+    let white2 = Whitening {
+        cost_before: target.whitened_cost(base_weighted, &rhos2),
+        rhos: rhos2,
+    };
+    let mut first_ranked = ranked(target, joint_first, &white2, n_eff2, n);
+    first_ranked.candidate = best.candidate.clone();
+    let mut second_ranked = ranked(target, second, &white2, n_eff2, n);
+    second_ranked.score = gain;
+    Some((
+        vec![first_ranked, second_ranked],
+        joint_first.weighted.clone(),
+    ))
+}
+
+/// The per-output summaries: floor, RMS before, RMS and windows after, and
+/// the judgement of what remains.
+fn output_summaries(
+    target: &Target,
+    rms_before: &[f64],
+    after_weighted: &[f64],
+    judged: Vec<Judgement>,
+) -> Vec<OutputSummary> {
+    let t = target.rec.t();
+    let nr = target.rec.len();
+    let dt = if nr > 1 {
+        (t[nr - 1] - t[0]) / (nr - 1) as f64
     } else {
         0.0
     };
-    let rms_after = target.rms_per_output(&after_weighted);
-    let outputs = names
+    let rms_after = target.rms_per_output(after_weighted);
+    target
+        .names
         .iter()
+        .zip(judged)
         .enumerate()
-        .map(|(j, name)| {
-            let nr = rec.len();
+        .map(|(j, (name, judgement))| {
             let resid: Vec<f64> = after_weighted[j * nr..(j + 1) * nr]
                 .iter()
                 .map(|r| r * target.sigma[j])
                 .collect();
+            // The band of the noise the judge took the residual for
+            // (coloured noise is wider than the white floor).
+            let band = 4.0 * judgement.noise_sigma.max(target.sigma[j]);
             OutputSummary {
                 name: name.clone(),
-                unit: model.unit(name),
+                unit: target.model.unit(name),
                 noise_floor: target.sigma[j],
                 rms_before: rms_before[j],
                 rms_after: rms_after[j],
-                remaining_windows: failure_windows(t, &resid, 4.0 * target.sigma[j], 5.0 * dt),
+                remaining_windows: failure_windows(t, &resid, band, 5.0 * dt),
+                judgement: Some(judgement),
             }
         })
-        .collect();
+        .collect()
+}
+
+/// The explanation of a recording that cannot be judged: the model's error
+/// as given (when the outputs can be simulated and measured), no ranking.
+///
+/// # Errors
+/// The model cannot simulate the recording.
+fn cannot_judge(
+    model: &dyn Model,
+    rec: &Recording,
+    names: &[String],
+    opts: &ExplainOptions,
+    reasons: Vec<String>,
+    warnings: Vec<String>,
+) -> Result<Explanation> {
+    let prediction = model.predict(rec)?;
+    let mut outputs = Vec::new();
+    for name in names {
+        let measured = rec.values(name)?;
+        let Some(p) = prediction.get(name) else {
+            continue;
+        };
+        let resid: Vec<f64> = measured.iter().zip(p).map(|(m, p)| m - p).collect();
+        let floor = noise_floor(name, measured, &opts.noise).sigma;
+        let rms_before = rms(&resid);
+        outputs.push(OutputSummary {
+            name: name.clone(),
+            unit: model.unit(name),
+            noise_floor: floor,
+            rms_before,
+            rms_after: rms_before,
+            remaining_windows: Vec::new(),
+            judgement: None,
+        });
+    }
     Ok(Explanation {
         model: model.name(),
-        verdict,
+        verdict: Verdict::CannotJudge,
         outputs,
-        ranked: ranking,
-        chosen,
-        margin,
-        effective_samples: n_eff,
-        cost_before,
+        ranked: Vec::new(),
+        chosen: Vec::new(),
+        margin: 0.0,
+        effective_samples: 0.0,
+        cost_before: 0.0,
         warnings,
+        reasons,
     })
+}
+
+/// What the judge needs of a target: the recorded inputs and the options.
+struct Judge<'a> {
+    target: &'a Target<'a>,
+    inputs: Vec<(&'a str, &'a [f64])>,
+    opts: JudgeOptions,
+}
+
+impl<'a> Judge<'a> {
+    fn new(target: &'a Target<'a>, opts: &ExplainOptions) -> Judge<'a> {
+        let inputs = target
+            .model
+            .inputs()
+            .into_iter()
+            .filter_map(|name| {
+                let s = target.rec.signal(&name)?;
+                let label: &'a str = &s.name;
+                Some((label, s.values.as_slice()))
+            })
+            .collect();
+        Judge {
+            target,
+            inputs,
+            opts: JudgeOptions {
+                floor_factor: opts.floor_factor,
+                outputs: target.names.len(),
+                ..JudgeOptions::default()
+            },
+        }
+    }
+
+    /// Judges each output's residual (weighted residuals in, per output).
+    fn judge(&self, weighted: &[f64]) -> Vec<Judgement> {
+        let nr = self.target.rec.len();
+        (0..self.target.names.len())
+            .map(|j| {
+                let sigma = self.target.sigma[j];
+                let resid: Vec<f64> = weighted[j * nr..(j + 1) * nr]
+                    .iter()
+                    .map(|r| r * sigma)
+                    .collect();
+                judge_residual(
+                    self.target.rec.t(),
+                    &resid,
+                    &self.target.floors[j],
+                    &self.inputs,
+                    &self.opts,
+                )
+            })
+            .collect()
+    }
 }
 
 fn failed_clone(f: &Fitted) -> Fitted {
@@ -1036,33 +1314,6 @@ fn fit_options(model: &dyn Model, opts: &ExplainOptions) -> FitOptions {
         fit.xtol = fit.xtol.max(xtol);
     }
     fit
-}
-
-/// Outputs up to which every output must be within the floor factor.
-pub const FEW_OUTPUTS: usize = 3;
-
-/// Whether residual RMS values sit at their noise floors `sigma`: each
-/// within `factor` × its floor when there are at most [`FEW_OUTPUTS`];
-/// with more, the quadratic mean of the ratios within `factor` and each
-/// within 2 × `factor`. Among dozens of outputs (a cloth's marker
-/// coordinates) one floor estimate is often off by 1.5×, and the strict
-/// rule would call a found effect partial; a single output that an effect
-/// leaves far from its floor still fails.
-#[must_use]
-pub fn at_noise_floor(rms: &[f64], sigma: &[f64], factor: f64) -> bool {
-    let ratios = rms.iter().zip(sigma).map(|(r, s)| r / s);
-    if rms.len() <= FEW_OUTPUTS {
-        return ratios.into_iter().all(|q| q <= factor);
-    }
-    let mut sum = 0.0;
-    for q in ratios {
-        // NaN fails too.
-        if q.is_nan() || q > 2.0 * factor {
-            return false;
-        }
-        sum += q * q;
-    }
-    (sum / rms.len() as f64).sqrt() <= factor
 }
 
 #[cfg(test)]

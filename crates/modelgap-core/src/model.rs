@@ -43,6 +43,23 @@ pub trait Model: Send + Sync {
         String::new()
     }
 
+    /// The inputs the model is driven by, by recording name (`V`, `m`):
+    /// whatever of them a recording holds, the judge holds the residuals
+    /// against (a model error answers what the input did; noise does not).
+    /// Empty (the default) for a model driven by nothing recorded.
+    fn inputs(&self) -> Vec<String> {
+        Vec::new()
+    }
+
+    /// The model's time constants (s) near the start of `rec`: the judge
+    /// says a recording cannot be judged when its samples lie too far apart
+    /// to see them, or it is too short to hold any (a time column in ms).
+    /// Empty (the default) when the model does not know them.
+    fn time_constants(&self, rec: &Recording) -> Vec<f64> {
+        let _ = rec;
+        Vec::new()
+    }
+
     /// Predicts the outputs at the recording's times, driven by the
     /// recording's inputs (those the model takes and the recording holds).
     ///

@@ -170,6 +170,69 @@ pub fn estimate_noise_sigma(values: &[f64]) -> f64 {
     MAD_TO_SIGMA * median(&mut deviations) / THIRD_DIFFERENCE_VARIANCE.sqrt()
 }
 
+/// Relative tolerance under which two values of a signal count as the same level in
+/// [`quantisation_step`] (decimal text rounds 0.6 to 0.6000000000000001).
+const LEVEL_TOLERANCE: f64 = 1e-9;
+
+/// How far, in steps, a gap between two levels may lie from a whole number of steps.
+const LATTICE_TOLERANCE: f64 = 0.02;
+
+/// The step of the lattice a quantised signal's values lie on (an ADC's or an encoder's
+/// resolution), or `None` when they do not.
+///
+/// A signal is quantised when it takes at most half as many distinct levels as it has
+/// samples, at least 3 of them, and every gap between neighbouring levels is a whole
+/// number of the smallest gap (within 2 %). Such a signal carries a rounding error of up to
+/// half a step that no model can follow: its noise floor is at least `step / √12`, while the
+/// third difference of a staircase is mostly exactly 0 and measures nearly nothing.
+///
+/// # Example
+///
+/// ```
+/// # use modelgap_core::residual::quantisation_step;
+/// let x: Vec<f64> = (0..200).map(|k| (f64::from(k) * 0.013).sin()).collect();
+/// let stairs: Vec<f64> = x.iter().map(|v| (v / 0.2).round() * 0.2).collect();
+/// assert!((quantisation_step(&stairs).unwrap() - 0.2).abs() < 1e-9);
+/// assert_eq!(quantisation_step(&x), None);
+/// ```
+pub fn quantisation_step(values: &[f64]) -> Option<f64> {
+    if values.len() < 8 {
+        return None;
+    }
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let range = sorted[sorted.len() - 1] - sorted[0];
+    if !(range > 0.0 && range.is_finite()) {
+        return None;
+    }
+    let same = LEVEL_TOLERANCE
+        * range
+            .max(sorted[0].abs())
+            .max(sorted[sorted.len() - 1].abs());
+    let mut levels: Vec<f64> = Vec::new();
+    for v in sorted {
+        match levels.last() {
+            Some(&last) if v - last <= same => {}
+            _ => levels.push(v),
+        }
+        if levels.len() > values.len() / 2 {
+            return None;
+        }
+    }
+    if levels.len() < 3 {
+        return None;
+    }
+    let step = levels
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .fold(f64::INFINITY, f64::min);
+    let on_lattice = levels.windows(2).all(|w| {
+        let k = (w[1] - w[0]) / step;
+        (k - k.round()).abs() <= LATTICE_TOLERANCE * k.round().max(1.0)
+    });
+    on_lattice.then_some(step)
+}
+
 /// The number of independent samples a residual is worth, given its correlation in time.
 ///
 /// Uses the AR(1) approximation `n_eff = n (1 − ρ₁) / (1 + ρ₁)`, with `ρ₁` the lag-1

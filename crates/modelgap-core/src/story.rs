@@ -45,13 +45,28 @@ pub fn verdict_sentence(ex: &Explanation) -> String {
         Verdict::EffectFound => format!("Missing: {}.", names(0)),
         Verdict::TwoEffects => format!("Missing: {}, and {}.", names(0), names(1)),
         Verdict::Partial => format!(
-            "Partly explained: {} removes part of the error, but what remains is above the noise floor — the true effect is probably not on the menu.",
+            "Partly explained: {} removes part of the error, but what remains is not noise — the true effect is probably not on the menu.",
             if ex.chosen.is_empty() {
                 "no candidate".to_string()
             } else {
                 names(0)
             }
         ),
+        Verdict::Unexplained => {
+            "Not explained: the model fails, and no candidate effect on the menu \
+             explains any of it significantly."
+                .to_string()
+        }
+        Verdict::CannotJudge => format!(
+            "Cannot judge: {}.",
+            ex.reasons
+                .first()
+                .map_or("the recording cannot be judged", String::as_str)
+        ),
+        Verdict::Interrupted => {
+            "Interrupted before a verdict: no effect was chosen and nothing was written."
+                .to_string()
+        }
     }
 }
 
@@ -119,11 +134,13 @@ pub fn comparison_text(c: &Comparison) -> String {
 /// The ranking and the verdict as text.
 pub fn explanation_text(ex: &Explanation, top: usize) -> String {
     let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "candidate effects, best first (score = evidence, a BIC difference with {} effective samples):",
-        num(ex.effective_samples)
-    );
+    if !ex.ranked.is_empty() {
+        let _ = writeln!(
+            s,
+            "candidate effects, best first (score = evidence, a BIC difference with {} effective samples):",
+            num(ex.effective_samples)
+        );
+    }
     for (i, r) in ex.ranked.iter().take(top).enumerate() {
         let params: Vec<String> = r.params.iter().map(param_text).collect();
         let rms: Vec<String> = ex
@@ -167,9 +184,22 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
              of the first deviations) points at the candidate's parameter; a hint, not part of the score"
         );
     }
-    let _ = writeln!(s, "margin to the runner-up: {}", num(ex.margin));
+    if !ex.ranked.is_empty() {
+        let _ = writeln!(s, "margin to the runner-up: {}", num(ex.margin));
+    }
     let _ = writeln!(s, "\nverdict: {}", verdict_sentence(ex));
+    let judged = !matches!(ex.verdict, Verdict::CannotJudge | Verdict::Interrupted);
     for o in &ex.outputs {
+        if !judged {
+            let _ = writeln!(
+                s,
+                "  {:<8} RMS {} {} (not judged)",
+                o.name,
+                num(o.rms_before),
+                o.unit
+            );
+            continue;
+        }
         let _ = writeln!(
             s,
             "  {:<8} RMS {} → {} {} (noise floor {}, {:.2}× the floor after)",
@@ -180,6 +210,24 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
             num(o.noise_floor),
             o.rms_after / o.noise_floor
         );
+        if let Some(j) = o.judgement.as_ref().filter(|j| j.coloured) {
+            let _ = writeln!(
+                s,
+                "           taken for coloured noise of σ {} {} (correlation time {} samples, \
+                 uncorrelated with the inputs, unbiased): the white floor sees only its fast part",
+                num(j.noise_sigma),
+                o.unit,
+                num(j.correlation_samples)
+            );
+        }
+        if let Some(q) = o.judgement.as_ref().and_then(|j| j.quantum) {
+            let _ = writeln!(
+                s,
+                "           quantised in steps of {} {}: the floor includes their rounding error",
+                num(q),
+                o.unit
+            );
+        }
         if ex.verdict == Verdict::Partial && !o.remaining_windows.is_empty() {
             let w: Vec<String> = o
                 .remaining_windows
@@ -189,6 +237,10 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
                 .collect();
             let _ = writeln!(s, "           still fails at {}", w.join(", "));
         }
+    }
+    let skip = usize::from(ex.verdict == Verdict::CannotJudge);
+    for r in ex.reasons.iter().skip(skip) {
+        let _ = writeln!(s, "  why: {r}");
     }
     for w in &ex.warnings {
         let _ = writeln!(s, "warning: {w}");
