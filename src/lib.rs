@@ -47,7 +47,8 @@ pub use modelgap_core::residual::{FailureWindow, NoiseFloor, Residual, ResidualS
 pub use modelgap_core::{
     Candidate, CompareOptions, Comparison, CoreError, Effect, EffectKind, EffectParam,
     ExplainOptions, Explanation, Location, Model, OutputComparison, Prediction, RankedCandidate,
-    Recording, Signal, Verdict, compare, explain, fit, io, math, noise, report, residual, story,
+    Recording, Signal, Verdict, compare, explain, fit, io, judge, math, noise, report, residual,
+    story,
 };
 
 pub use modelgap_bond::BondError;

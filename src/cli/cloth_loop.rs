@@ -32,7 +32,7 @@ use super::explain::ExplainArgs;
 use super::fix::{Addition, FixArgs, check_out, checked_pick, effect_line, what_to_add};
 use super::report::{
     HoldArg, LoopArgs, args_text, args_text_with_model, explanation_json, json_text, print_notes,
-    report_line, run_explain_model,
+    report_line, run_explain_model, stop_if_interrupted,
 };
 
 /// Worst markers listed in text.
@@ -290,6 +290,7 @@ pub fn write_report(
     loaded: &ClothLoaded,
     parts: ClothReport<'_>,
 ) -> anyhow::Result<PathBuf> {
+    super::interrupt::check("the report was not written")?;
     let scene = loaded.scene();
     let triangles = modelgap::cloth::BuildMesh::build_mesh(&scene.cloth)?.triangles;
     let mut report = cloth_report(
@@ -408,6 +409,7 @@ pub fn explain_command(args: &ExplainArgs, scene_path: &Path) -> anyhow::Result<
         print_notes(&loaded.notes);
     }
     let ex = run_explain_model(&loaded.model, &loaded.rec, &loaded.noise, args.json)?;
+    stop_if_interrupted(&ex, args.json, args.top)?;
     let page = match &args.common.report {
         Some(dir) => {
             let (before, cloth) = loaded.compare(&loaded.model)?;
@@ -452,7 +454,10 @@ pub fn explain_command(args: &ExplainArgs, scene_path: &Path) -> anyhow::Result<
     if let Some(page) = &page {
         out.push_str(&report_line(page));
     }
-    if ex.verdict != Verdict::NothingMissing {
+    if matches!(
+        ex.verdict,
+        Verdict::EffectFound | Verdict::TwoEffects | Verdict::Partial
+    ) {
         out.push_str(&format!(
             "next: `modelgap fix {} --out {}-fixed.toml` writes the scene file with the new term \
              and shows the error fall\n",
@@ -494,6 +499,7 @@ pub fn fix_command(args: &FixArgs, scene_path: &Path) -> anyhow::Result<()> {
     let pick = checked_pick(args.effect.as_deref(), &loaded.model, "scene")?;
     print_notes(&loaded.notes);
     let ex = run_explain_model(&loaded.model, &loaded.rec, &loaded.noise, false)?;
+    stop_if_interrupted(&ex, false, args.top)?;
     let mut out = format!(
         "scene {} explaining {} ({} candidate effects fitted)\n",
         ex.model,
@@ -517,14 +523,15 @@ pub fn fix_command(args: &FixArgs, scene_path: &Path) -> anyhow::Result<()> {
     let text = fixed
         .to_file_text()
         .context("the scene with the effect cannot be written as a scene file")?;
-    std::fs::write(&args.out, &text)
-        .with_context(|| format!("writing the new scene to {}", args.out.display()))?;
-    Scene::from_path(&args.out).with_context(|| {
+    Scene::from_toml(&text, &args.out.display().to_string()).with_context(|| {
         format!(
-            "the scene written to {} does not read back (a bug; please report it)",
+            "the scene for {} does not read back (a bug; please report it)",
             args.out.display()
         )
     })?;
+    super::interrupt::check("the new scene was not written")?;
+    modelgap::io::atomic::write_atomic(&args.out, text.as_bytes())
+        .with_context(|| format!("writing the new scene to {}", args.out.display()))?;
     out.push('\n');
     for r in &added {
         out.push_str(&format!("added: {}\n", effect_line(r)));

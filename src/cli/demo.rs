@@ -42,7 +42,7 @@ use super::cloth_loop::{
 };
 use super::report::{
     Loaded, ReportParts, before_after_text, report_line, run_compare, run_explain,
-    run_explain_model, write_report,
+    run_explain_model, stop_if_interrupted, write_report,
 };
 
 /// The bundled recording, as CSV text.
@@ -177,6 +177,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     super::print(&out)?;
     out.clear();
     let ex = run_explain(&loaded, false)?;
+    stop_if_interrupted(&ex, false, TOP)?;
     out.push_str(&format!(
         "\n3. What is missing: {} candidate effects (parameters that are off, elements the model lacks,\n   \
          abrupt changes) fitted to the recording and ranked by evidence:\n\n",
@@ -238,6 +239,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     if args.skip_table7 {
         return Ok(());
     }
+    super::interrupt::check("Table 7 was not run")?;
     let rows = table7(&Table7Options::default()).context("running the Table 7 faults")?;
     let mut out = String::from(
         "\n7. The DC-motor paper's Table 7 (bond-graph fault diagnosis of a buck converter feeding the\n   \
@@ -299,6 +301,7 @@ fn cloth_story(dir: &Path) -> anyhow::Result<()> {
     out.clear();
 
     let ex = run_explain_model(&loaded.model, &loaded.rec, &loaded.noise, false)?;
+    stop_if_interrupted(&ex, false, TOP)?;
     out.push_str(&format!(
         "\n   What is missing: {} candidate effects fitted to the markers and ranked by evidence:\n\n",
         ex.ranked.len()

@@ -11,7 +11,7 @@ use serde_json::json;
 
 use super::report::{
     Loaded, LoopArgs, ReportParts, args_text, data_name, explanation_json, json_text, load_loop,
-    print_notes, report_line, run_compare, run_explain, write_report,
+    print_notes, report_line, run_compare, run_explain, stop_if_interrupted, write_report,
 };
 
 /// Arguments of `modelgap explain`.
@@ -46,6 +46,7 @@ pub fn run(args: &ExplainArgs) -> anyhow::Result<()> {
         print_notes(&loaded.notes);
     }
     let ex = run_explain(&loaded, args.json)?;
+    stop_if_interrupted(&ex, args.json, args.top)?;
     let page = match &args.common.report {
         Some(dir) => {
             let (before, after) = before_after(&loaded, &ex)?;
@@ -81,7 +82,10 @@ pub fn run(args: &ExplainArgs) -> anyhow::Result<()> {
     if let Some(page) = &page {
         out.push_str(&report_line(page));
     }
-    if ex.verdict != Verdict::NothingMissing {
+    if matches!(
+        ex.verdict,
+        Verdict::EffectFound | Verdict::TwoEffects | Verdict::Partial
+    ) {
         out.push_str(&format!(
             "next: `modelgap fix {} --out {}-fixed.toml` adds it to the model and shows the error fall\n",
             args_text(&args.common),

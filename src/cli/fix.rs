@@ -7,14 +7,14 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 use clap::Args;
-use modelgap::bond::file::read_model_path;
+use modelgap::bond::file::read_model;
 use modelgap::story::{explanation_text, verdict_sentence};
 use modelgap::{Effect, EffectKind, Explanation, Model as _, RankedCandidate, Verdict};
 
 use super::BadInput;
 use super::report::{
     LoopArgs, ReportParts, args_text_with_model, before_after_text, data_name, load_loop,
-    print_notes, report_line, run_compare, run_explain, write_report,
+    print_notes, report_line, run_compare, run_explain, stop_if_interrupted, write_report,
 };
 
 /// Arguments of `modelgap fix`.
@@ -112,6 +112,7 @@ pub fn run(args: &FixArgs) -> anyhow::Result<()> {
     let pick = checked_pick(args.effect.as_deref(), &loaded.model, "model")?;
     print_notes(&loaded.notes);
     let ex = run_explain(&loaded, false)?;
+    stop_if_interrupted(&ex, false, args.top)?;
     let mut out = format!(
         "model {} explaining {} ({} candidate effects fitted)\n",
         ex.model,
@@ -139,14 +140,15 @@ pub fn run(args: &FixArgs) -> anyhow::Result<()> {
             loaded.model.name()
         ))
     })?;
-    std::fs::write(&args.out, &text)
-        .with_context(|| format!("writing the new model to {}", args.out.display()))?;
-    read_model_path(&args.out).with_context(|| {
+    read_model(&text).with_context(|| {
         format!(
-            "the model written to {} does not read back (a bug; please report it)",
+            "the model for {} does not read back (a bug; please report it)",
             args.out.display()
         )
     })?;
+    super::interrupt::check("the new model was not written")?;
+    modelgap::io::atomic::write_atomic(&args.out, text.as_bytes())
+        .with_context(|| format!("writing the new model to {}", args.out.display()))?;
 
     out.push('\n');
     for r in &added {

@@ -20,6 +20,7 @@ mod explain;
 mod fix;
 mod format;
 mod graph;
+mod interrupt;
 mod model;
 mod noise;
 mod report;
@@ -89,6 +90,8 @@ enum BondCommand {
 ///
 /// Whatever the command meets, with context naming the file or model concerned.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
+    // Ctrl-C from here on sets a flag that long work checks (see `interrupt`).
+    let _ = interrupt::flag();
     match cli.command {
         Command::Bond(BondCommand::Equations(args)) => equations::run(&args),
         Command::Bond(BondCommand::Simulate(args)) => simulate::run(&args),
@@ -116,11 +119,16 @@ pub struct BadInput(pub String);
 const EXIT_BAD_INPUT: u8 = 2;
 /// Exit code 1: the command failed for another reason (a solver, a write).
 const EXIT_FAILURE: u8 = 1;
+/// Exit code 130: interrupted by Ctrl-C (as a shell reports SIGINT).
+const EXIT_INTERRUPTED: u8 = 130;
 
 /// The process exit code for an error: 2 when the user's input is at fault (a bad argument,
 /// a model or data file that is missing or malformed, an unknown name), 1 otherwise.
 pub fn exit_code(err: &anyhow::Error) -> u8 {
     for cause in err.chain() {
+        if cause.downcast_ref::<interrupt::Interrupted>().is_some() {
+            return EXIT_INTERRUPTED;
+        }
         if cause.downcast_ref::<BadInput>().is_some() {
             return EXIT_BAD_INPUT;
         }

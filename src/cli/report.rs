@@ -3,10 +3,9 @@
 //! that name the file, running explain behind a progress bar, writing the report, and the
 //! JSON shapes of a comparison and an explanation.
 //!
-//! Ctrl-C is not caught: the standard library has no signal handling and installing a
-//! handler needs a crate (`ctrlc`) or `unsafe` code, which the workspace denies. The
-//! default action ends the process; files are only written after the work is done, so an
-//! interrupted run leaves no half-written report behind.
+//! Ctrl-C stops explain between candidate fits ([`super::interrupt`]): the run ends with
+//! the verdict `interrupted`, only the fits that finished ranked, nothing written, exit
+//! code 130.
 
 use std::collections::BTreeMap;
 use std::io::IsTerminal as _;
@@ -356,23 +355,34 @@ pub fn run_explain_model(
         })),
         ..ExplainOptions::default()
     };
-    // Ctrl-C stops the fits between candidates; what was found so far is kept
-    // and reported (a second Ctrl-C ends the process).
-    let cancel = Arc::new(modelgap::fit::Cancel::new());
-    let on_interrupt = cancel.clone();
-    let _ = ctrlc::set_handler(move || {
-        if on_interrupt.is_cancelled() {
-            std::process::exit(130);
-        }
-        on_interrupt.cancel();
-    });
+    // Ctrl-C stops the fits between candidates: the verdict is then
+    // `interrupted` (a second Ctrl-C ends the process).
     let opts = ExplainOptions {
-        cancel: Some(cancel),
+        cancel: Some(super::interrupt::flag()),
         ..opts
     };
     let result = explain(model, rec, &opts);
     bar.finish_and_clear();
     result.with_context(|| format!("explaining the recording with model {}", model.name()))
+}
+
+/// After explain: when Ctrl-C interrupted it, prints what there is — the finished fits and
+/// the verdict `interrupted` as text, or the JSON with `"interrupted": true` — and returns
+/// [`super::interrupt::Interrupted`] (exit code 130) so that nothing is written.
+///
+/// # Errors
+///
+/// [`super::interrupt::Interrupted`] when the run was interrupted; printing errors.
+pub fn stop_if_interrupted(ex: &Explanation, json: bool, top: usize) -> anyhow::Result<()> {
+    if ex.verdict != modelgap::Verdict::Interrupted {
+        return Ok(());
+    }
+    if json {
+        super::print(&json_text(&explanation_json(ex))?)?;
+    } else {
+        super::print(&modelgap::story::explanation_text(ex, top))?;
+    }
+    Err(super::interrupt::Interrupted("no verdict; nothing was written".to_owned()).into())
 }
 
 /// Compares a model (the loaded one, or one with effects built in) with the recording.
@@ -412,6 +422,7 @@ pub fn write_report(dir: &Path, parts: ReportParts<'_>) -> anyhow::Result<PathBu
         data,
         verdict,
     } = parts;
+    super::interrupt::check("the report was not written")?;
     let mut report = build_report(before, explanation, after);
     report.title = format!("modelgap: {} against {data}", before.model);
     if let Some(v) = verdict {
@@ -576,6 +587,7 @@ pub fn explanation_json(ex: &Explanation) -> Value {
                 "rms_before": finite(o.rms_before),
                 "rms_after": finite(o.rms_after),
                 "remaining_windows": remaining,
+                "judgement": o.judgement.as_ref().map(judgement_json),
             })
         })
         .collect();
@@ -598,12 +610,33 @@ pub fn explanation_json(ex: &Explanation) -> Value {
         "model": ex.model,
         "verdict": ex.verdict.to_string(),
         "verdict_text": modelgap::story::verdict_sentence(ex),
+        "interrupted": ex.verdict == modelgap::Verdict::Interrupted,
+        "reasons": ex.reasons,
         "outputs": outputs,
         "ranked": ranked,
         "chosen": chosen,
         "margin": finite(ex.margin),
         "effective_samples": finite(ex.effective_samples),
         "warnings": ex.warnings,
+    })
+}
+
+/// The judge's reading of one output's residual as JSON.
+fn judgement_json(j: &modelgap::judge::Judgement) -> Value {
+    json!({
+        "at_floor": j.at_floor,
+        "noise_sigma": finite(j.noise_sigma),
+        "coloured": j.coloured,
+        "correlation_samples": finite(j.correlation_samples),
+        "quantum": j.quantum.map(finite),
+        "windows": j.windows,
+        "bias_z": finite(j.bias_z),
+        "input_correlation": j.input.as_ref().map(|c| json!({
+            "input": c.input,
+            "lag": c.lag,
+            "z": finite(c.z),
+        })),
+        "reasons": j.reasons,
     })
 }
 

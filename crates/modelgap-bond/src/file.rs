@@ -525,13 +525,14 @@ pub fn write_model(g: &BondGraph) -> String {
     s
 }
 
-/// Writes a model file.
+/// Writes a model file, atomically (an earlier file is replaced only when
+/// the new one is complete).
 ///
 /// # Errors
-/// [`BondError::Io`] if the file cannot be written.
+/// [`BondError::Core`] if the file cannot be written.
 pub fn write_model_path(g: &BondGraph, path: &Path) -> Result<()> {
-    std::fs::write(path, write_model(g)).map_err(|source| BondError::Io {
-        message: format!("cannot write model file {}", path.display()),
-        source,
-    })
+    Ok(modelgap_core::io::atomic::write_atomic(
+        path,
+        write_model(g).as_bytes(),
+    )?)
 }

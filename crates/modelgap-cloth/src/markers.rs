@@ -41,6 +41,7 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, BufWriter, Read, Seek, Write};
 use std::path::Path;
 
+use modelgap_core::io::atomic::{AtomicFile, commit_buffered};
 use modelgap_core::io::mcap::{
     ChannelId, McapCompression, McapWriter, TopicMessage, read_topic_messages,
 };
@@ -342,8 +343,9 @@ pub fn write_markers_csv(recording: &MarkerRecording, writer: impl Write) -> Res
 ///
 /// As [`write_markers_csv`], plus [`ClothError::Core`] when the file cannot be created.
 pub fn write_markers_csv_path(recording: &MarkerRecording, path: &Path) -> Result<()> {
-    let file = File::create(path).map_err(|e| CoreError::io(e, Some(path)))?;
-    write_markers_csv(recording, file).map_err(|e| e.with_path(path))
+    let mut file = AtomicFile::create(path)?;
+    write_markers_csv(recording, &mut file).map_err(|e| e.with_path(path))?;
+    Ok(file.commit()?)
 }
 
 fn parse_row(line: &str, line_no: usize) -> Result<(f64, u32, [f64; 3])> {
@@ -526,11 +528,11 @@ pub fn write_markers_frame<W: Write + Seek>(
 ///
 /// [`ClothError::MarkerField`] when two frames are less than 1 ns apart (MCAP's time
 /// resolution); [`ClothError::Core`] when writing fails.
-pub fn write_markers_mcap(
+pub fn write_markers_mcap<W: Write + Seek>(
     recording: &MarkerRecording,
-    writer: impl Write + Seek,
+    writer: W,
     compression: McapCompression,
-) -> Result<()> {
+) -> Result<W> {
     let t0 = recording.t[0];
     let mut prev_ns = None;
     for (k, &t) in recording.t.iter().enumerate() {
@@ -550,8 +552,7 @@ pub fn write_markers_mcap(
     for (&t, frame) in recording.t.iter().zip(&recording.positions) {
         write_markers_frame(&mut out, channel, t - t0, &recording.ids, frame)?;
     }
-    out.finish()?;
-    Ok(())
+    Ok(out.finish()?)
 }
 
 /// Writes a marker recording to a zstd-compressed MCAP file (created or truncated); like
@@ -561,9 +562,10 @@ pub fn write_markers_mcap(
 ///
 /// As [`write_markers_mcap`], plus [`ClothError::Core`] when the file cannot be created.
 pub fn write_markers_mcap_path(recording: &MarkerRecording, path: &Path) -> Result<()> {
-    let file = File::create(path).map_err(|e| CoreError::io(e, Some(path)))?;
-    write_markers_mcap(recording, BufWriter::new(file), McapCompression::Zstd)
-        .map_err(|e| e.with_path(path))
+    let file = AtomicFile::create(path)?;
+    let w = write_markers_mcap(recording, BufWriter::new(file), McapCompression::Zstd)
+        .map_err(|e| e.with_path(path))?;
+    Ok(commit_buffered(w)?)
 }
 
 /// Reads a marker recording from the [`MARKERS_TOPIC`] messages of MCAP data in memory.

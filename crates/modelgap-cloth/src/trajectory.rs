@@ -24,11 +24,10 @@
 //! # Ok::<(), modelgap_cloth::ClothError>(())
 //! ```
 
-use std::fs::File;
+use modelgap_core::io::atomic::{AtomicFile, commit_buffered};
 use std::io::{BufWriter, Seek, Write};
 use std::path::Path;
 
-use modelgap_core::CoreError;
 use modelgap_core::io::Format;
 use modelgap_core::io::mcap::{McapCompression, McapWriter};
 
@@ -232,11 +231,11 @@ fn check_positive(name: &'static str, value: f64) -> Result<()> {
 ///
 /// [`ClothError::NoMarkerFrames`] for a run without recorded frames; [`ClothError::Core`]
 /// when writing fails.
-pub fn write_run_mcap(
+pub fn write_run_mcap<W: Write + Seek>(
     run: &ClothRun,
-    writer: impl Write + Seek,
+    writer: W,
     compression: McapCompression,
-) -> Result<()> {
+) -> Result<W> {
     let Some(markers) = &run.markers else {
         return Err(ClothError::NoMarkerFrames { path: None });
     };
@@ -266,8 +265,7 @@ pub fn write_run_mcap(
         out.write_json(scene, t - t0, &update)?;
         write_markers_frame(&mut out, channel, t - t0, markers.ids(), frame)?;
     }
-    out.finish()?;
-    Ok(())
+    Ok(out.finish()?)
 }
 
 /// Writes a run to a file by extension: `.csv` the markers ([`write_markers_csv_path`]),
@@ -287,9 +285,10 @@ pub fn write_run_path(run: &ClothRun, path: &Path) -> Result<()> {
     match format {
         Format::Csv => write_markers_csv_path(markers, path),
         Format::Mcap => {
-            let file = File::create(path).map_err(|e| CoreError::io(e, Some(path)))?;
-            write_run_mcap(run, BufWriter::new(file), McapCompression::Zstd)
-                .map_err(|e| e.with_path(path))
+            let file = AtomicFile::create(path)?;
+            let w = write_run_mcap(run, BufWriter::new(file), McapCompression::Zstd)
+                .map_err(|e| e.with_path(path))?;
+            Ok(commit_buffered(w)?)
         }
     }
 }

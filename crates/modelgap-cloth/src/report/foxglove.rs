@@ -2,7 +2,7 @@
 //! coloured by the marker error at each frame (`foxglove.SceneUpdate`, JSON), the measured
 //! markers, a `/tf` frame, and the error per marker as flat JSON.
 
-use std::fs::File;
+use modelgap_core::io::atomic::{AtomicFile, commit_buffered};
 use std::io::{BufWriter, Seek, Write};
 use std::path::Path;
 
@@ -57,7 +57,7 @@ pub struct ErrorMcap<'a> {
 ///
 /// [`ClothError::Core`] when the frame counts of the recording, the comparisons and the
 /// meshes differ, a mesh frame misses vertices, or writing fails.
-pub fn write_error_mcap(m: &ErrorMcap<'_>, writer: impl Write + Seek) -> Result<()> {
+pub fn write_error_mcap<W: Write + Seek>(m: &ErrorMcap<'_>, writer: W) -> Result<W> {
     validate(m)?;
     let n_vertices = m.before.nx * m.before.nz;
     let weights = vertex_weights(m.before);
@@ -152,8 +152,7 @@ pub fn write_error_mcap(m: &ErrorMcap<'_>, writer: impl Write + Seek) -> Result<
         }
         write_markers_frame(&mut out, markers, t, m.measured.ids(), frame)?;
     }
-    out.finish()?;
-    Ok(())
+    Ok(out.finish()?)
 }
 
 /// One side of the comparison (the model as given, or with the effect) and its channels.
@@ -172,8 +171,9 @@ struct Stream<'a> {
 /// As [`write_error_mcap`], plus [`ClothError::Core`] when the file cannot be created.
 pub fn write_error_mcap_path(m: &ErrorMcap<'_>, path: &Path) -> Result<()> {
     validate(m).map_err(|e| e.with_path(path))?;
-    let file = File::create(path).map_err(|e| CoreError::io(e, Some(path)))?;
-    write_error_mcap(m, BufWriter::new(file)).map_err(|e| e.with_path(path))
+    let file = AtomicFile::create(path)?;
+    let w = write_error_mcap(m, BufWriter::new(file)).map_err(|e| e.with_path(path))?;
+    Ok(commit_buffered(w)?)
 }
 
 fn validate(m: &ErrorMcap<'_>) -> Result<()> {

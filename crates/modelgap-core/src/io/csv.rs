@@ -137,8 +137,10 @@ pub fn write_signals(recording: &Recording, writer: impl Write) -> Result<()> {
 ///
 /// As [`write_signals`], plus [`CoreError::Io`] when the file cannot be created.
 pub fn write_signals_path(recording: &Recording, path: &Path) -> Result<()> {
-    let file = File::create(path).map_err(|e| CoreError::io(e, Some(path)))?;
-    write_signals(recording, file).map_err(|e| e.with_path(path))
+    let file = super::atomic::AtomicFile::create(path)?;
+    let mut w = BufWriter::new(file);
+    write_signals(recording, &mut w).map_err(|e| e.with_path(path))?;
+    super::atomic::commit_buffered(w)
 }
 
 fn parse_header(line: &str, line_no: usize) -> Result<Vec<String>> {

@@ -5,6 +5,7 @@
 //! (`read_signals_path`, `write_signals_path`). [`read_recording_path`] and
 //! [`write_recording_path`] pick the format from the file extension.
 
+pub mod atomic;
 pub mod csv;
 pub mod mcap;
 

@@ -1,7 +1,7 @@
 //! The comparison as MCAP for Foxglove: measured, model and residual channels side by side.
 
+use crate::io::atomic::{AtomicFile, commit_buffered};
 use std::collections::BTreeSet;
-use std::fs::File;
 use std::io::{BufWriter, Seek, Write};
 use std::path::Path;
 
@@ -76,7 +76,7 @@ pub struct ComparisonChannels<'a> {
 /// assert_eq!(residual.values("i")?, &[0.0, 0.5]);
 /// # Ok::<(), modelgap_core::CoreError>(())
 /// ```
-pub fn write_comparison(c: &ComparisonChannels<'_>, writer: impl Write + Seek) -> Result<()> {
+pub fn write_comparison<W: Write + Seek>(c: &ComparisonChannels<'_>, writer: W) -> Result<W> {
     validate(c)?;
     let residual = difference(c.measured, c.before);
     let residual_after = c.after.map(|after| difference(c.measured, after));
@@ -112,8 +112,7 @@ pub fn write_comparison(c: &ComparisonChannels<'_>, writer: impl Write + Seek) -
             out.write_json(channel, t, &serde_json::Value::Object(message))?;
         }
     }
-    out.finish()?;
-    Ok(())
+    out.finish()
 }
 
 /// Writes a comparison to an MCAP file (created or truncated); like [`write_comparison`],
@@ -125,8 +124,9 @@ pub fn write_comparison(c: &ComparisonChannels<'_>, writer: impl Write + Seek) -
 pub fn write_comparison_mcap(c: &ComparisonChannels<'_>, path: &Path) -> Result<()> {
     // Checked before the file is created, so bad input leaves no empty file behind.
     validate(c)?;
-    let file = File::create(path).map_err(|e| CoreError::io(e, Some(path)))?;
-    write_comparison(c, BufWriter::new(file)).map_err(|e| e.with_path(path))
+    let file = AtomicFile::create(path)?;
+    let w = write_comparison(c, BufWriter::new(file)).map_err(|e| e.with_path(path))?;
+    commit_buffered(w)
 }
 
 fn difference(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<Vec<f64>> {

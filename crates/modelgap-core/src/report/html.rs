@@ -7,7 +7,7 @@ use std::path::Path;
 use super::format::{escape, format_number, with_unit};
 use super::svg::{ranking_svg, residual_svg, series_svg};
 use super::{Report, ResidualPlot, SeriesPlot};
-use crate::error::{CoreError, Result};
+use crate::error::Result;
 
 /// The most failure windows listed by time in a residual plot's caption.
 const MAX_LISTED_WINDOWS: usize = 6;
@@ -155,7 +155,7 @@ pub fn render_html(report: &Report) -> String {
 /// The errors of [`Report::validate`]; [`CoreError::Io`] when the file cannot be written.
 pub fn write_html(report: &Report, path: &Path) -> Result<()> {
     report.validate()?;
-    std::fs::write(path, render_html(report)).map_err(|e| CoreError::io(e, Some(path)))
+    crate::io::atomic::write_atomic(path, render_html(report).as_bytes())
 }
 
 /// `caption_html` must already be escaped.

@@ -22,7 +22,6 @@
 
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
-use std::fs::File;
 use std::io::{BufWriter, Seek, Write};
 use std::path::Path;
 
@@ -228,18 +227,18 @@ pub fn read_signals_path(path: &Path, topic: &str) -> Result<Recording> {
 ///
 /// Time is shifted to start at `log_time` 0 and rounded to whole nanoseconds (see the
 /// module docs). The file is always finished (summary and footer written), also on error
-/// paths that leave a usable writer.
+/// paths that leave a usable writer. Returns the writer, flushed.
 ///
 /// # Errors
 ///
 /// [`CoreError::McapTime`] when two samples are closer than 1 ns or the recording spans more
 /// than `u64::MAX` ns; [`CoreError::McapWrite`] or [`CoreError::Io`] when writing fails.
-pub fn write_signals(
+pub fn write_signals<W: Write + Seek>(
     recording: &Recording,
-    writer: impl Write + Seek,
+    writer: W,
     topic: &str,
     compression: McapCompression,
-) -> Result<()> {
+) -> Result<W> {
     let log_times = log_times_ns(recording.t())?;
     let names = recording.names();
     let mut out = McapWriter::new(writer, compression)?;
@@ -263,8 +262,7 @@ pub fn write_signals(
         text.push('}');
         out.write_bytes(channel, log_time_ns, text.as_bytes())?;
     }
-    out.finish()?;
-    Ok(())
+    out.finish()
 }
 
 /// Writes a recording to an MCAP file (created or truncated); like [`write_signals`], with
@@ -279,9 +277,10 @@ pub fn write_signals_path(
     topic: &str,
     compression: McapCompression,
 ) -> Result<()> {
-    let file = File::create(path).map_err(|e| CoreError::io(e, Some(path)))?;
-    write_signals(recording, BufWriter::new(file), topic, compression)
-        .map_err(|e| e.with_path(path))
+    let file = crate::io::atomic::AtomicFile::create(path)?;
+    let w = write_signals(recording, BufWriter::new(file), topic, compression)
+        .map_err(|e| e.with_path(path))?;
+    crate::io::atomic::commit_buffered(w)
 }
 
 /// The log times (ns) of a recording's samples, the first at 0.

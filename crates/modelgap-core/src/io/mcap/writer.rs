@@ -1,6 +1,5 @@
 //! [`McapWriter`]: JSON channels written to one MCAP file.
 
-use std::fs::File;
 use std::io::{BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
 
@@ -9,6 +8,7 @@ use ::mcap::{McapError, WriteOptions, Writer};
 
 use super::{MESSAGE_ENCODING, NS_PER_S, SCHEMA_ENCODING, mcap_error_text};
 use crate::error::{CoreError, Location, Result};
+use crate::io::atomic::{AtomicFile, commit_buffered};
 
 /// How MCAP chunks are compressed when writing. Reading handles all of them.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -57,8 +57,10 @@ pub struct ChannelId(u16);
 /// side, for example).
 ///
 /// Call [`finish`](Self::finish) to write the summary and footer and see any error. A writer
-/// dropped unfinished still finishes and flushes the file (ignoring errors), so data is never
-/// silently lost.
+/// on any stream dropped unfinished still finishes and flushes it (ignoring errors), so data
+/// is never silently cut short; a file made with [`McapWriter::create`] is written atomically
+/// and appears only after [`McapWriter::finish_file`] (dropped before that, it leaves any
+/// earlier file at its path untouched).
 ///
 /// # Example
 ///
@@ -73,7 +75,7 @@ pub struct ChannelId(u16);
 /// assert!(bytes.starts_with(b"\x89MCAP0\r\n"));
 /// # Ok::<(), modelgap_core::CoreError>(())
 /// ```
-pub struct McapWriter<W: Write + Seek = BufWriter<File>> {
+pub struct McapWriter<W: Write + Seek = BufWriter<AtomicFile>> {
     /// `None` once finished.
     inner: Option<Writer<W>>,
     /// One sequence counter per channel, indexed by channel id.
@@ -81,19 +83,30 @@ pub struct McapWriter<W: Write + Seek = BufWriter<File>> {
     path: Option<PathBuf>,
 }
 
-impl McapWriter<BufWriter<File>> {
-    /// Creates (or truncates) an MCAP file at `path`.
+impl McapWriter<BufWriter<AtomicFile>> {
+    /// Starts an MCAP file at `path`, written atomically: it replaces an
+    /// existing file only when [`McapWriter::finish_file`] completes, and a
+    /// writer dropped before that leaves the earlier file as it was.
     ///
     /// # Errors
     ///
     /// [`CoreError::Io`] when the file cannot be created; [`CoreError::McapWrite`] when the
     /// MCAP header cannot be written.
     pub fn create(path: &Path, compression: McapCompression) -> Result<Self> {
-        let file = File::create(path).map_err(|e| CoreError::io(e, Some(path)))?;
+        let file = AtomicFile::create(path)?;
         let mut writer =
             Self::new(BufWriter::new(file), compression).map_err(|e| e.with_path(path))?;
         writer.path = Some(path.to_path_buf());
         Ok(writer)
+    }
+
+    /// Finishes the file and renames it into place.
+    ///
+    /// # Errors
+    ///
+    /// As [`McapWriter::finish`], and [`CoreError::Io`] when the file cannot be renamed.
+    pub fn finish_file(self) -> Result<()> {
+        commit_buffered(self.finish()?)
     }
 }
 
