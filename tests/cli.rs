@@ -399,3 +399,289 @@ fn unknown_output_extension_fails_before_simulating() {
 fn demo_runs() {
     ok(&["demo"]);
 }
+
+/// The built-in DC motor's model file with `from` replaced by `to`, written into `dir`.
+fn motor_file_with(dir: &TempDir, name: &str, from: &str, to: &str) -> String {
+    let src = include_str!("../crates/modelgap-bond/models/dc-motor.toml");
+    assert!(src.contains(from), "{from}");
+    let path = dir.path(name);
+    std::fs::write(&path, src.replace(from, to)).unwrap();
+    path
+}
+
+/// The bundled motor recording.
+const MOTOR_CSV: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/examples/data/motor_hidden_effect.csv"
+);
+
+// Issue 11: a bad parameter used to end in "state 0 or its derivative is not finite",
+// printed twice, exit 1 (2 through compare); `--set J=-1` was accepted.
+#[test]
+fn a_parameter_an_element_cannot_have_is_named_and_exits_2() {
+    for (set, expected) in [
+        (
+            "k=1e300",
+            "parameter 'k' must be finite and at most 1e100 in magnitude, found 1e300",
+        ),
+        (
+            "L=0",
+            "parameter L of element L (I: inductance, H) must be positive, found 0",
+        ),
+        (
+            "J=-1",
+            "parameter J of element J (I: inertia, kg m^2) must be positive, found -1",
+        ),
+        (
+            "R=-1",
+            "parameter R of element R (R: resistance, Ohm) must be zero or positive, found -1",
+        ),
+    ] {
+        let stderr = fails(
+            &["bond", "simulate", "--model", "dc-motor", "--set", set],
+            2,
+        );
+        assert!(stderr.contains(expected), "{stderr}");
+        let stderr = fails(
+            &[
+                "compare", "--model", "dc-motor", "--set", set, "--data", MOTOR_CSV,
+            ],
+            2,
+        );
+        assert!(stderr.contains(expected), "{stderr}");
+    }
+    // A model file with the bad value names the parameter and the line it is on.
+    let dir = TempDir::new("unphysical_file");
+    let model = motor_file_with(&dir, "m.toml", "L = { value = 5e-3", "L = { value = 0.0");
+    let stderr = fails(&["bond", "simulate", "--model", &model], 2);
+    assert!(
+        stderr.contains("parameter L of element L") && stderr.contains("line 11"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn a_law_that_is_nan_at_the_start_is_named_once_and_exits_2() {
+    let dir = TempDir::new("nan_law");
+    let model = motor_file_with(
+        &dir,
+        "m.toml",
+        "name = \"R\"\nkind = \"R\"\nparameter = \"R\"",
+        "name = \"R\"\nkind = \"R\"\neffort = \"f/0\"",
+    );
+    let expected = "the effort law of element R, `f/0`, is NaN at the start (f = 0)";
+    let stderr = fails(&["bond", "simulate", "--model", &model], 2);
+    assert_eq!(stderr.matches(expected).count(), 1, "{stderr}");
+    let stderr = fails(&["compare", "--model", &model, "--data", MOTOR_CSV], 2);
+    assert!(stderr.contains(expected), "{stderr}");
+}
+
+#[test]
+fn a_state_that_runs_away_is_named_by_state_and_element_once() {
+    let stderr = fails(
+        &[
+            "bond",
+            "simulate",
+            "--model",
+            "dc-motor",
+            "--set",
+            "k=1e60",
+            "--duration",
+            "0.1",
+        ],
+        2,
+    );
+    assert_eq!(
+        stderr.matches("not finite").count(),
+        1,
+        "printed once: {stderr}"
+    );
+    assert!(
+        stderr.contains("state p3 (the momentum of I:L) or its derivative is not finite"),
+        "{stderr}"
+    );
+}
+
+// Issue 11: a PWM at 1 THz grew memory until the allocator aborted the process.
+#[test]
+fn runs_past_their_limits_are_refused_before_work_naming_the_option() {
+    let stderr = fails(
+        &[
+            "bond",
+            "simulate",
+            "--model",
+            "buck-motor",
+            "--input",
+            "m=pwm:0.5@1e12",
+        ],
+        2,
+    );
+    assert!(
+        stderr.contains("input m") && stderr.contains("--max-events 10000000"),
+        "{stderr}"
+    );
+    let stderr = fails(
+        &["bond", "simulate", "--model", "dc-motor", "--rate", "1e12"],
+        2,
+    );
+    assert!(
+        stderr.contains("1e12 Hz") && stderr.contains("--max-samples"),
+        "{stderr}"
+    );
+    // Raising the limit is what a user who means the run does.
+    ok(&[
+        "bond",
+        "simulate",
+        "--model",
+        "buck-motor",
+        "--input",
+        "m=pwm:0.5@100",
+        "--duration",
+        "0.1",
+        "--max-events",
+        "100",
+    ]);
+    fails(
+        &[
+            "bond",
+            "simulate",
+            "--model",
+            "buck-motor",
+            "--input",
+            "m=pwm:0.5@100",
+            "--duration",
+            "0.1",
+            "--max-events",
+            "10",
+        ],
+        2,
+    );
+}
+
+// Issue 11: `--duration -1` got clap's "unexpected argument '-1'".
+#[test]
+fn negative_option_values_are_refused_naming_the_option() {
+    for (args, option, found) in [
+        (
+            vec![
+                "bond",
+                "simulate",
+                "--model",
+                "dc-motor",
+                "--duration",
+                "-1",
+            ],
+            "--duration",
+            "found -1 s",
+        ),
+        (
+            vec!["bond", "simulate", "--model", "dc-motor", "--rate", "-5"],
+            "--rate",
+            "found -5 Hz",
+        ),
+        (
+            vec!["bond", "simulate", "--model", "dc-motor", "--noise", "-0.1"],
+            "--noise",
+            "found -0.1",
+        ),
+        (
+            vec![
+                "compare",
+                "--model",
+                "dc-motor",
+                "--data",
+                MOTOR_CSV,
+                "--band-sigmas",
+                "-1",
+            ],
+            "--band-sigmas",
+            "found -1",
+        ),
+        (
+            vec![
+                "explain", "--model", "dc-motor", "--data", MOTOR_CSV, "--top", "-1",
+            ],
+            "--top",
+            "found -1",
+        ),
+        (
+            vec![
+                "bond",
+                "diagnose",
+                "--model",
+                "dc-motor",
+                "--data",
+                MOTOR_CSV,
+                "--persistence",
+                "-2",
+            ],
+            "--persistence",
+            "found -2",
+        ),
+        (
+            vec!["bond", "table7", "--magnitude", "-0.2"],
+            "--magnitude",
+            "found -0.2",
+        ),
+        (
+            vec!["bond", "bench", "--repeat", "0"],
+            "--repeat",
+            "found 0",
+        ),
+    ] {
+        let stderr = fails(&args, 2);
+        assert!(
+            stderr.contains(option) && stderr.contains(found),
+            "{args:?}: {stderr}"
+        );
+        assert!(!stderr.contains("unexpected argument"), "{stderr}");
+    }
+}
+
+#[test]
+fn a_directory_where_a_file_is_expected_is_named_with_its_option() {
+    let dir = TempDir::new("directories");
+    let d = dir.0.to_string_lossy().into_owned();
+    let stderr = fails(&["compare", "--model", "dc-motor", "--data", &d], 2);
+    assert!(
+        stderr.contains(&format!("--data {d} is a directory: give a recording file")),
+        "{stderr}"
+    );
+    let stderr = fails(
+        &["bond", "simulate", "--model", "dc-motor", "--inputs", &d],
+        2,
+    );
+    assert!(
+        stderr.contains(&format!("--inputs {d} is a directory")),
+        "{stderr}"
+    );
+    let stderr = fails(&["bond", "simulate", "--model", &d], 2);
+    assert!(
+        stderr.contains(&format!("--model {d} is a directory")),
+        "{stderr}"
+    );
+    let stderr = fails(&["bond", "simulate", "--model", "dc-motor", "--out", &d], 2);
+    assert!(
+        stderr.contains(&format!("--out {d} is a directory")),
+        "{stderr}"
+    );
+}
+
+// Issue 11: values near f64::MAX made compare print `NaN× the noise floor`.
+#[test]
+fn a_recording_with_values_beyond_the_magnitude_limit_is_refused() {
+    let dir = TempDir::new("huge_values");
+    let data = dir.path("huge.csv");
+    let mut text = String::from("t,V,i,omega\n");
+    for k in 0..20 {
+        let omega = if k == 7 { "1.7e308" } else { "1" };
+        text.push_str(&format!("{},12,1,{omega}\n", f64::from(k) * 0.01));
+    }
+    std::fs::write(&data, text).unwrap();
+    let stderr = fails(&["compare", "--model", "dc-motor", "--data", &data], 2);
+    assert!(
+        stderr.contains("line 9") && stderr.contains("`omega`") && stderr.contains("1e100"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("NaN"), "{stderr}");
+}

@@ -1,5 +1,6 @@
 //! End-to-end tests of `modelgap cloth`: runs written as CSV and MCAP and read back, the
-//! bench's JSON, and the exit code for an unknown scene.
+//! bench's JSON, the exit code for an unknown scene, and the hard edges of issue 11 (limits,
+//! bounds, duplicate pins, OBJ indices and marker ids named where they are).
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // in test helpers, a panic is a test failure
 
@@ -257,4 +258,362 @@ fn unknown_scene_exits_with_2_naming_the_built_ins() {
     assert!(stderr.contains("corner, two-corners, drape"), "{stderr}");
     let out = modelgap(&["cloth", "bench", "--scene", "nope"]);
     assert_eq!(out.status.code(), Some(2));
+}
+
+/// Runs modelgap and returns its standard error, asserting exit code 2 (bad input), that
+/// nothing panicked or aborted, and that `out` (when given) was not written.
+fn bad_input(args: &[&str], out: Option<&str>) -> String {
+    let output = modelgap(args);
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert_eq!(
+        output.status.code(),
+        Some(2),
+        "modelgap {args:?}\nstderr:\n{stderr}"
+    );
+    if let Some(out) = out {
+        assert!(!std::path::Path::new(out).exists(), "{out} was written");
+    }
+    stderr
+}
+
+/// A 3 x 3 scene file in `dir` pinned at vertex 0, with `extra` top-level lines and
+/// `cloth` lines in `[cloth]`, and `tail` after it.
+fn small_scene(dir: &TempDir, name: &str, extra: &str, cloth: &str, tail: &str) -> String {
+    let path = dir.path(name);
+    std::fs::write(
+        &path,
+        format!(
+            "name = 'small'\nduration = 0.02\ndt = 0.01\n{extra}\n[cloth]\nnx = 3\nnz = 3\n\
+             size = 1.0\n{cloth}\n{tail}\n"
+        ),
+    )
+    .unwrap();
+    path
+}
+
+/// Issue 11: sizes without limits aborted the process (SIGABRT) while allocating.
+#[test]
+fn run_and_bench_refuse_sizes_past_their_limits_before_allocating() {
+    let dir = TempDir::new("limits");
+    let out = dir.path("out.csv");
+    let wide = small_scene(&dir, "wide.toml", "", "pins = [0]", "");
+    let text = std::fs::read_to_string(&wide)
+        .unwrap()
+        .replace("nx = 3", "nx = 100000")
+        .replace("nz = 3", "nz = 100000");
+    std::fs::write(&wide, text).unwrap();
+    let err = bad_input(
+        &["cloth", "run", "--scene", &wide, "--out", &out],
+        Some(&out),
+    );
+    assert!(
+        err.contains(
+            "expected at most 1000000 particles (`max_particles`), found a 100000 x \
+                      100000 grid of 10000000000 particles"
+        ) && err.contains("--max-particles"),
+        "{err}"
+    );
+    let absurd = small_scene(&dir, "absurd.toml", "", "", "");
+    let text = std::fs::read_to_string(&absurd)
+        .unwrap()
+        .replace("nx = 3", "nx = 99999999999");
+    std::fs::write(&absurd, text).unwrap();
+    let err = bad_input(
+        &["cloth", "run", "--scene", &absurd, "--out", &out],
+        Some(&out),
+    );
+    assert!(err.contains("99999999999 x 3 grid"), "{err}");
+    let err = bad_input(
+        &[
+            "cloth", "bench", "--scene", "corner", "--nx", "50000", "--nz", "50000",
+        ],
+        None,
+    );
+    assert!(
+        err.contains("--nx 50000 --nz 50000") && err.contains("2500000000 particles"),
+        "{err}"
+    );
+    let tiny_dt = small_scene(&dir, "dt.toml", "", "pins = [0]", "");
+    let text = std::fs::read_to_string(&tiny_dt)
+        .unwrap()
+        .replace("dt = 0.01", "dt = 1e-9");
+    std::fs::write(&tiny_dt, text).unwrap();
+    let err = bad_input(
+        &["cloth", "run", "--scene", &tiny_dt, "--out", &out],
+        Some(&out),
+    );
+    assert!(
+        err.contains(
+            "expected at most 10000000 steps (`max_steps`), found 2e7 (duration 0.02 s \
+                      / dt 1e-9 s)"
+        ) && err.contains("--max-steps"),
+        "{err}"
+    );
+    // The limits are options: lowered here, so a small run meets them.
+    let small = small_scene(&dir, "small.toml", "", "pins = [0]", "");
+    let err = bad_input(
+        &[
+            "cloth",
+            "run",
+            "--scene",
+            &small,
+            "--max-particles",
+            "8",
+            "--out",
+            &out,
+        ],
+        Some(&out),
+    );
+    assert!(err.contains("expected at most 8 particles"), "{err}");
+    let err = bad_input(
+        &["cloth", "bench", "--scene", &small, "--max-steps", "1"],
+        None,
+    );
+    assert!(err.contains("expected at most 1 steps"), "{err}");
+    let err = bad_input(
+        &[
+            "cloth",
+            "run",
+            "--scene",
+            "corner",
+            "--max-frame-mib",
+            "1",
+            "--out",
+            &out,
+        ],
+        Some(&out),
+    );
+    assert!(
+        err.contains("(`max_frame_bytes`), found 302 frames x 1800 positions")
+            && err.contains("--max-frame-mib"),
+        "{err}"
+    );
+    ok(&[
+        "cloth",
+        "run",
+        "--scene",
+        &small,
+        "--max-particles",
+        "9",
+        "--max-steps",
+        "2",
+        "--out",
+        &out,
+    ]);
+}
+
+/// Issue 11: gravity -1e200 printed "worst stretch inf", exited 0 and wrote -2e201;
+/// gravity 1e15 took 110 s for 5 steps.
+#[test]
+fn run_refuses_gravity_past_its_bound_naming_the_field() {
+    let dir = TempDir::new("gravity");
+    let out = dir.path("out.csv");
+    for (g, found) in [
+        ("-1e200", "found [0, -1e200, 0] (magnitude 1e200 m/s^2)"),
+        ("-1e15", "found [0, -1e15, 0] (magnitude 1e15 m/s^2)"),
+        ("nan", "found [0, NaN, 0]"),
+    ] {
+        let scene = small_scene(
+            &dir,
+            "g.toml",
+            &format!("gravity = [0.0, {g}, 0.0]"),
+            "pins = [0]",
+            "",
+        );
+        let err = bad_input(
+            &["cloth", "run", "--scene", &scene, "--out", &out],
+            Some(&out),
+        );
+        assert!(
+            err.contains("g.toml': gravity must be finite and at most 1000 m/s^2 in magnitude")
+                && err.contains(found),
+            "{err}"
+        );
+    }
+}
+
+/// Issue 11: a vertex pinned twice was accepted silently; other fields name themselves.
+#[test]
+fn run_refuses_duplicate_pins_and_bad_fields_naming_them() {
+    let dir = TempDir::new("fields");
+    let out = dir.path("out.csv");
+    let twice = small_scene(&dir, "twice.toml", "", "pins = [0, 2, 0]", "");
+    let err = bad_input(
+        &["cloth", "run", "--scene", &twice, "--out", &out],
+        Some(&out),
+    );
+    assert!(
+        err.contains(
+            "vertex 0 is pinned twice, by cloth.pins[0] and by cloth.pins[2]; expected each \
+             vertex pinned once"
+        ),
+        "{err}"
+    );
+    let moving = small_scene(
+        &dir,
+        "moving.toml",
+        "",
+        "pins = [2]",
+        "[[pins.paths]]\nvertex = 2\npath = [[0.0, 1.0, 0.0, 0.0]]",
+    );
+    let err = bad_input(
+        &["cloth", "run", "--scene", &moving, "--out", &out],
+        Some(&out),
+    );
+    assert!(
+        err.contains("by cloth.pins[0] and by pins.paths[0].vertex"),
+        "{err}"
+    );
+    for (cloth, message) in [
+        (
+            "pins = [9]",
+            "cloth.pins[0] must be a vertex of the 3 x 3 grid (below 9), found 9",
+        ),
+        (
+            "particle_mass = -1.0",
+            "cloth.particle_mass must be positive and finite, found -1",
+        ),
+        (
+            "origin = [0.0, inf, 0.0]",
+            "cloth.origin must be finite coordinates",
+        ),
+    ] {
+        let scene = small_scene(&dir, "field.toml", "", cloth, "");
+        let err = bad_input(
+            &["cloth", "run", "--scene", &scene, "--out", &out],
+            Some(&out),
+        );
+        assert!(err.contains(message), "{cloth}: {err}");
+    }
+    let err = bad_input(
+        &[
+            "cloth",
+            "run",
+            "--scene",
+            "corner",
+            "--markers",
+            "0,950",
+            "--out",
+            &out,
+        ],
+        Some(&out),
+    );
+    assert!(
+        err.contains(
+            "--markers: expected vertex ids of scene corner (30 x 30 grid, 0 to 899), \
+                      found 950"
+        ),
+        "{err}"
+    );
+}
+
+/// Issue 11: an OBJ face index out of range had no line, and -9 was reported as "vertex 9".
+#[test]
+fn obj_face_index_out_of_range_names_line_index_and_file() {
+    let dir = TempDir::new("obj");
+    let out = dir.path("out.csv");
+    std::fs::write(
+        dir.path("table.obj"),
+        "# a table\nv 0 -1 0\nv 1 -1 0\nv 1 -1 1\nf 1 2 3\nf 1 3 -9\n",
+    )
+    .unwrap();
+    let scene = small_scene(
+        &dir,
+        "obj.toml",
+        "",
+        "pins = [0]",
+        "[[colliders]]\nshape = \"trimesh\"\nobj = \"table.obj\"",
+    );
+    let err = bad_input(
+        &["cloth", "run", "--scene", &scene, "--out", &out],
+        Some(&out),
+    );
+    assert!(
+        err.contains(
+            "colliders[0]: OBJ line 6: expected a face vertex index from 1 to 3 or from -3 to \
+             -1 (3 vertices defined so far), found -9 in "
+        ) && err.contains("table.obj"),
+        "{err}"
+    );
+    // Negative indices within range are OBJ's relative indices, and work.
+    std::fs::write(
+        dir.path("table.obj"),
+        "v 0 -1 0\nv 1 -1 0\nv 1 -1 1\nf -3 -2 -1\n",
+    )
+    .unwrap();
+    ok(&["cloth", "run", "--scene", &scene, "--out", &out]);
+}
+
+/// Issue 11: a bad marker id 4000 on line 7 was reported as another id on a later line.
+#[test]
+fn a_marker_id_outside_the_grid_is_named_at_its_own_line() {
+    let dir = TempDir::new("ids");
+    let scene = small_scene(&dir, "small.toml", "", "pins = [0]", "");
+    let run = dir.path("run.csv");
+    ok(&["cloth", "run", "--scene", &scene, "--out", &run]);
+    let text = std::fs::read_to_string(&run).unwrap();
+    let bad: Vec<String> = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i + 1 == 7 {
+                let cells: Vec<&str> = l.split(',').collect();
+                format!("{},4000,{}", cells[0], cells[2..].join(","))
+            } else {
+                l.to_owned()
+            }
+        })
+        .collect();
+    let data = dir.path("bad.csv");
+    std::fs::write(&data, bad.join("\n") + "\n").unwrap();
+    let err = bad_input(&["compare", "--model", &scene, "--data", &data], None);
+    assert!(
+        err.contains("for scene small (3 x 3 grid)")
+            && err.contains(
+                "expected a vertex of the mesh (0 to 8) for `id` at line 7, found marker id 4000 in "
+            )
+            && err.contains("bad.csv"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_run_killed_mid_way_leaves_the_earlier_file_whole() {
+    // Issue 11: SIGKILL during `cloth run` left a 94-byte MCAP stub over a good 1.68 MB file.
+    let dir = TempDir::new("killed");
+    let out = dir.path("run.mcap");
+    ok(&[
+        "cloth",
+        "run",
+        "--scene",
+        "corner",
+        "--duration",
+        "0.05",
+        "--out",
+        &out,
+    ]);
+    let before = std::fs::read(&out).unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_modelgap"))
+        .args([
+            "cloth",
+            "run",
+            "--scene",
+            "drape",
+            "--duration",
+            "30",
+            "--out",
+            &out,
+        ])
+        .spawn()
+        .unwrap();
+    // Not a timing assertion: the 30 s run takes far longer than this in any profile.
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    child.kill().unwrap();
+    let status = child.wait().unwrap();
+    assert!(!status.success());
+    assert_eq!(
+        std::fs::read(&out).unwrap(),
+        before,
+        "the earlier file changed"
+    );
 }

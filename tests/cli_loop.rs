@@ -446,3 +446,55 @@ fn compare_takes_the_papers_band() {
     let band = omega["band"].as_f64().unwrap();
     assert!((band - 0.02 * 239.04).abs() < 0.05, "band {band}");
 }
+
+/// Starts `modelgap` with `args`, sends it Ctrl-C (SIGINT) once it has worked for a while,
+/// and returns what it printed and its exit code.
+fn interrupted(args: &[&str]) -> (String, String, Option<i32>) {
+    let child = Command::new(env!("CARGO_BIN_EXE_modelgap"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the modelgap binary runs");
+    // Not an assertion on time: the explain below takes many seconds, and an interrupt
+    // that comes later than this only finds it further along.
+    std::thread::sleep(std::time::Duration::from_millis(700));
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(status.success());
+    let out = child.wait_with_output().unwrap();
+    (
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+        out.status.code(),
+    )
+}
+
+#[test]
+fn ctrl_c_stops_explain_and_fix_without_a_verdict_or_a_file() {
+    // Issue 11: an interrupted explain ranked unfinished fits as if done and wrote a report.
+    let dir = TempDir::new("interrupt");
+    let data = recording(&dir, "coulomb", 40.0, "long.csv");
+    let report = dir.path("report");
+    let (stdout, stderr, code) = interrupted(&[
+        "explain", "--model", "dc-motor", "--data", &data, "--json", "--report", &report,
+    ]);
+    assert_eq!(code, Some(130), "stdout:\n{stdout}\nstderr:\n{stderr}");
+    let v: Value = serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("{e}: {stdout}"));
+    assert_eq!(v["interrupted"], true);
+    assert_eq!(v["verdict"], "interrupted");
+    assert_eq!(v["chosen"].as_array().map(Vec::len), Some(0));
+    assert!(stderr.contains("interrupted (Ctrl-C)"), "{stderr}");
+    assert!(!Path::new(&report).exists(), "a report was written");
+
+    let out = dir.path("fixed.toml");
+    std::fs::write(&out, "an earlier file\n").unwrap();
+    let (stdout, stderr, code) =
+        interrupted(&["fix", "--model", "dc-motor", "--data", &data, "--out", &out]);
+    assert_eq!(code, Some(130), "stdout:\n{stdout}\nstderr:\n{stderr}");
+    assert!(stdout.contains("Interrupted before a verdict"), "{stdout}");
+    assert!(!stdout.contains("Nothing is missing"), "{stdout}");
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "an earlier file\n");
+}

@@ -641,9 +641,9 @@ impl PyBondModel {
     fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
         let text = self.to_toml();
         detached(py, move || {
-            std::fs::write(&path, text).map_err(|e| (e, path))
+            modelgap::io::atomic::write_atomic(&path, text.as_bytes())
         })?
-        .map_err(|(e, path)| to_py_err(modelgap::CoreError::io(e, Some(path.as_path()))))
+        .map_err(to_py_err)
     }
 
     /// Restores a pickled model (see ``__reduce__``).

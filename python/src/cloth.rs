@@ -1554,6 +1554,7 @@ impl PyScene {
             duration,
             rate,
             markers: selection,
+            ..RunOptions::default()
         };
         let scene = &self.inner;
         let run = detached(py, move || run_scene(scene, &options))?.map_err(cloth_err)?;

@@ -265,6 +265,17 @@ impl PyOutputComparison {
     fn effective_samples(&self) -> f64 {
         self.inner.effective_samples
     }
+    /// The measurement's quantisation step when it lies on a lattice (its rounding error is
+    /// part of the floor), else ``None``.
+    #[getter]
+    fn quantum(&self) -> Option<f64> {
+        self.inner.quantum
+    }
+    /// Why this output cannot be judged (a dead sensor that reads a constant), else ``None``.
+    #[getter]
+    fn finding(&self) -> Option<String> {
+        self.inner.finding.clone()
+    }
     /// measured − predicted, a fresh float64 array.
     #[getter]
     fn residual<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
@@ -320,6 +331,12 @@ impl PyComparison {
             .iter()
             .map(|o| PyOutputComparison { inner: o.clone() })
             .collect()
+    }
+    /// What keeps the recording, or an output of it, from being judged: too few samples, a
+    /// dead sensor, a time base that hides the model's time constants.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.inner.warnings.clone()
     }
     /// The comparison of one output. Raises ``DataError`` for an output not compared.
     fn output(&self, name: &str) -> PyResult<PyOutputComparison> {
@@ -608,6 +625,28 @@ impl PyOutputSummary {
     fn remaining_windows(&self) -> Vec<(f64, f64, f64)> {
         windows(&self.inner.remaining_windows)
     }
+    /// Whether the residual after the effects is what noise leaves: at its floor (or taken for
+    /// coloured noise), no failure window, uncorrelated with the inputs, unbiased; ``None``
+    /// when the recording could not be judged.
+    #[getter]
+    fn at_floor(&self) -> Option<bool> {
+        self.inner.judgement.as_ref().map(|j| j.at_floor)
+    }
+    /// σ of the noise the residual was taken for (the floor, or the level of coloured noise),
+    /// in the output's unit; ``None`` when not judged.
+    #[getter]
+    fn noise_sigma(&self) -> Option<f64> {
+        self.inner.judgement.as_ref().map(|j| j.noise_sigma)
+    }
+    /// Why the residual is not what noise leaves (empty when it is, or when not judged).
+    #[getter]
+    fn reasons(&self) -> Vec<String> {
+        self.inner
+            .judgement
+            .as_ref()
+            .map(|j| j.reasons.clone())
+            .unwrap_or_default()
+    }
     fn __repr__(&self) -> String {
         format!(
             "<OutputSummary {} rms {:.4e} -> {:.4e} {} (noise floor {:.4e})>",
@@ -633,10 +672,18 @@ impl PyExplanation {
     fn model(&self) -> &str {
         &self.inner.model
     }
-    /// ``nothing-missing``, ``effect-found``, ``two-effects`` or ``partial``.
+    /// ``nothing-missing``, ``effect-found``, ``two-effects``, ``partial``, ``unexplained``,
+    /// ``cannot-judge`` or ``interrupted``.
     #[getter]
     fn verdict(&self) -> String {
         self.inner.verdict.to_string()
+    }
+    /// Why the verdict is what it is when it is not a complete answer: what keeps the
+    /// recording from being judged, which output's residual is not noise and how, or how far
+    /// an interrupted run got.
+    #[getter]
+    fn reasons(&self) -> Vec<String> {
+        self.inner.reasons.clone()
     }
     /// Per output: noise floor, RMS before and after.
     #[getter]

@@ -7,7 +7,7 @@
 use modelgap::bond::BondError;
 use modelgap::cloth::ClothError;
 use modelgap::{CoreError, Error};
-use pyo3::exceptions::{PyException, PyValueError};
+use pyo3::exceptions::{PyException, PyKeyboardInterrupt, PyValueError};
 use pyo3::prelude::*;
 
 pyo3::create_exception!(
@@ -89,9 +89,13 @@ fn bond_kind(e: &BondError) -> Kind {
         | BondError::BadInput { .. }
         | BondError::BadOptions(_)
         | BondError::BadParameter { .. }
+        | BondError::UnphysicalParameter { .. }
+        | BondError::TooLarge { .. }
         | BondError::UnknownParameter { .. }
         | BondError::UnknownModel { .. } => Kind::Data,
         BondError::Ode(_) => Kind::Convergence,
+        // A law that is NaN at the start and a state that runs away are the model's own:
+        // ModelError, as for every other model that cannot be simulated.
         _ => Kind::Model,
     }
 }
@@ -117,11 +121,15 @@ pub fn to_py_err(e: impl Into<Error>) -> PyErr {
 
 /// Converts a cloth error into its Python exception, with the Rust message unchanged.
 ///
-/// Every cloth error is about its input (a mesh, a parameter, a file, a state set from
-/// Python), so all are `DataError`s, except core errors, which map as `to_py_err` maps them.
+/// Cloth errors are about their input (a mesh, a parameter, a limit, a file, a state set
+/// from Python), so they are `DataError`s, except a simulation that diverged (a
+/// `ModelError`: the model cannot be simulated), a cancelled run (`KeyboardInterrupt`), and
+/// core errors, which map as `to_py_err` maps them.
 pub fn cloth_err(e: ClothError) -> PyErr {
     match e {
         ClothError::Core(c) => to_py_err(c),
+        e @ ClothError::Diverged { .. } => ModelError::new_err(e.to_string()),
+        e @ ClothError::Cancelled { .. } => PyKeyboardInterrupt::new_err(e.to_string()),
         other => data_error(other.to_string()),
     }
 }

@@ -7,7 +7,7 @@ use clap::Args;
 use modelgap::bond::arr::{arr_residuals, derive_arrs};
 use modelgap::bond::{Equations, assign_causality};
 
-use super::model::{ModelArgs, load};
+use super::model::{ModelArgs, load, read_recording_arg};
 
 /// Arguments of `modelgap bond arr`.
 #[derive(Debug, Args)]
@@ -35,8 +35,7 @@ pub fn run(args: &ArrArgs) -> anyhow::Result<()> {
         derive_arrs(&g, &eqs).with_context(|| format!("deriving the ARRs of model {}", g.name))?;
     let mut out = analysis.to_text();
     if let Some(path) = &args.data {
-        let rec = modelgap::io::read_recording_path(path)
-            .with_context(|| format!("reading recording {}", path.display()))?;
+        let rec = read_recording_arg("--data", "recording", path)?;
         let residuals = arr_residuals(&analysis.arrs, &rec)
             .with_context(|| format!("evaluating the ARRs on {}", path.display()))?;
         out.push_str(&format!("\nARR residuals on {}:\n", path.display()));

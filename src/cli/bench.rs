@@ -18,6 +18,7 @@ use modelgap::bond::simulate::{Drive, Inputs, Run, SimOptions, Solver, simulate,
 use serde::Serialize;
 
 use super::format::{Align, aligned, num};
+use super::model::parse_count;
 
 /// Simulated time of the DC-motor runs (s).
 const DC_MOTOR_DURATION: f64 = 4.0;
@@ -59,8 +60,8 @@ pub struct BenchArgs {
     json: bool,
 
     /// Runs per case [default: enough for 0.5 s per case, and at least 20]
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
-    repeat: Option<u64>,
+    #[arg(long, value_name = "N", value_parser = parse_count, allow_negative_numbers = true)]
+    repeat: Option<usize>,
 }
 
 /// One reference run to time.
@@ -165,9 +166,7 @@ struct Report {
 ///
 /// A simulation that fails, or standard output that cannot be written.
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
-    let repeat = args
-        .repeat
-        .map(|n| usize::try_from(n).unwrap_or(usize::MAX));
+    let repeat = args.repeat;
     let mut cases = Vec::new();
     let mut checks = Vec::new();
     for case in cases_to_time() {

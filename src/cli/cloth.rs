@@ -10,7 +10,7 @@ use clap::{Args, Subcommand, ValueEnum};
 use modelgap::cloth::Method;
 use modelgap::cloth::scenes::{self, Scene};
 use modelgap::cloth::trajectory::{
-    ClothRun, MarkerSelection, RunOptions, RunStats, run_scene, write_run_path,
+    ClothRun, MarkerSelection, RunLimits, RunOptions, RunStats, run_scene, write_run_path,
 };
 use modelgap::io::Format;
 use serde::Serialize;
@@ -43,11 +43,11 @@ pub struct RunArgs {
     out: PathBuf,
 
     /// Simulated time (s) [default: the scene's]
-    #[arg(long, value_name = "T", value_parser = parse_positive)]
+    #[arg(long, value_name = "T", value_parser = parse_positive, allow_negative_numbers = true)]
     duration: Option<f64>,
 
     /// Frames per second written (Hz) [default: one per step]
-    #[arg(long, value_name = "HZ", value_parser = parse_positive)]
+    #[arg(long, value_name = "HZ", value_parser = parse_positive, allow_negative_numbers = true)]
     rate: Option<f64>,
 
     /// The vertices written as markers: `all` or ids (vertex indices) separated by commas
@@ -57,6 +57,40 @@ pub struct RunArgs {
     /// Constraint solver [default: the scene's, newton]
     #[arg(long, value_enum)]
     method: Option<MethodArg>,
+
+    #[command(flatten)]
+    limits: LimitArgs,
+
+    /// The most memory the recorded frames may take (MiB): frames x (vertices + markers) x
+    /// 24 bytes [default: 2048]
+    #[arg(long, value_name = "MIB", value_parser = clap::value_parser!(u64).range(1..), allow_negative_numbers = true)]
+    max_frame_mib: Option<u64>,
+}
+
+/// The size limits of `cloth run` and `cloth bench`, checked before the run starts.
+#[derive(Debug, Args)]
+struct LimitArgs {
+    /// The most particles (nx x nz) the scene's grid may have [default: 1000000]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..), allow_negative_numbers = true)]
+    max_particles: Option<u64>,
+
+    /// The most steps (duration / dt) the run may take [default: 10000000]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..), allow_negative_numbers = true)]
+    max_steps: Option<u64>,
+}
+
+impl LimitArgs {
+    /// Puts the particle limit on the scene's grid and returns the run's limits.
+    fn apply(&self, scene: &mut Scene) -> RunLimits {
+        if let Some(n) = self.max_particles {
+            scene.cloth.max_particles = usize::try_from(n).unwrap_or(usize::MAX);
+        }
+        let mut limits = RunLimits::default();
+        if let Some(n) = self.max_steps {
+            limits.max_steps = usize::try_from(n).unwrap_or(usize::MAX);
+        }
+        limits
+    }
 }
 
 /// The constraint solver (`--method`).
@@ -88,15 +122,15 @@ pub struct BenchArgs {
     scene: String,
 
     /// Vertices along x (the scene's grid is resized, pins kept at their places)
-    #[arg(long, value_name = "N", requires = "nz")]
+    #[arg(long, value_name = "N", requires = "nz", allow_negative_numbers = true)]
     nx: Option<usize>,
 
     /// Vertices along z
-    #[arg(long, value_name = "N", requires = "nx")]
+    #[arg(long, value_name = "N", requires = "nx", allow_negative_numbers = true)]
     nz: Option<usize>,
 
     /// Simulated time (s) [default: the scene's]
-    #[arg(long, value_name = "T", value_parser = parse_positive)]
+    #[arg(long, value_name = "T", value_parser = parse_positive, allow_negative_numbers = true)]
     duration: Option<f64>,
 
     /// Constraint solver [default: the scene's, newton]
@@ -104,7 +138,7 @@ pub struct BenchArgs {
     method: Option<MethodArg>,
 
     /// Run the solver in a pool of N threads [default: 1]
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..), allow_negative_numbers = true)]
     threads: Option<u16>,
 
     /// Gauss-Seidel sweep order [default: coloured when --threads is given, else serial]
@@ -112,12 +146,15 @@ pub struct BenchArgs {
     sweep: Option<SweepArg>,
 
     /// Allowed relative stretch per step [default: the scene's, 1e-4]
-    #[arg(long, value_name = "REL", value_parser = parse_positive)]
+    #[arg(long, value_name = "REL", value_parser = parse_positive, allow_negative_numbers = true)]
     tolerance: Option<f64>,
 
     /// Iteration limit per step (sweeps or Newton solves) [default: 1000]
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..), allow_negative_numbers = true)]
     max_iterations: Option<u32>,
+
+    #[command(flatten)]
+    limits: LimitArgs,
 
     /// Print JSON instead of text
     #[arg(long)]
@@ -155,16 +192,35 @@ fn run_cmd(args: &RunArgs) -> anyhow::Result<()> {
     if let Some(m) = args.method {
         scene.params.method = m.into();
     }
+    let mut limits = args.limits.apply(&mut scene);
+    if let (MarkerSelection::Ids(ids), Ok(n)) = (&args.markers, scene.cloth.n_vertices())
+        && let Some(bad) = ids.iter().find(|&&id| id as usize >= n)
+    {
+        return Err(BadInput(format!(
+            "--markers: expected vertex ids of scene {} ({} x {} grid, 0 to {}), found {bad}",
+            scene.name,
+            scene.cloth.nx,
+            scene.cloth.nz,
+            n - 1
+        ))
+        .into());
+    }
+    if let Some(mib) = args.max_frame_mib {
+        limits.max_frame_bytes = mib.saturating_mul(1 << 20);
+    }
     let options = RunOptions {
         duration: args.duration,
         rate: args.rate,
         markers: args.markers.clone(),
+        limits,
+        cancel: Some(super::interrupt::flag()),
     };
     let start = Instant::now();
     let run = run_scene(&scene, &options)
-        .map_err(|e| bad_input_if_user(e, &scene.name))
+        .map_err(|e| run_error(e, &scene.name))
         .with_context(|| format!("running scene {}", scene.name))?;
     let wall = start.elapsed().as_secs_f64();
+    super::interrupt::check(&format!("{} not written", args.out.display()))?;
     write_run_path(&run, &args.out).with_context(|| format!("writing {}", args.out.display()))?;
     super::print(&run_summary(&run, wall, &args.out))
 }
@@ -239,11 +295,12 @@ struct BenchReport {
 
 fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     let mut scene = load_scene(&args.scene)?;
+    let limits = args.limits.apply(&mut scene);
     if let (Some(nx), Some(nz)) = (args.nx, args.nz) {
         scene = scene
             .resized(nx, nz)
-            .map_err(|e| BadInput(e.to_string()))
-            .context("resizing the scene's grid")?;
+            .map_err(|e| run_error(e, &scene.name))
+            .with_context(|| format!("resizing the scene's grid to --nx {nx} --nz {nz}"))?;
     }
     if let Some(m) = args.method {
         scene.params.method = m.into();
@@ -262,6 +319,8 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     let options = RunOptions {
         duration: args.duration,
         markers: MarkerSelection::None,
+        limits,
+        cancel: Some(super::interrupt::flag()),
         ..RunOptions::default()
     };
     let pool = rayon::ThreadPoolBuilder::new()
@@ -271,8 +330,9 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let run = pool
         .install(|| run_scene(&scene, &options))
-        .map_err(|e| bad_input_if_user(e, &scene.name))
+        .map_err(|e| run_error(e, &scene.name))
         .with_context(|| format!("running scene {}", scene.name))?;
+    super::interrupt::check("the bench's report not printed")?;
     let wall_s = start.elapsed().as_secs_f64();
     let st = run.stats;
     let report = BenchReport {
@@ -367,14 +427,30 @@ fn load_scene(name: &str) -> anyhow::Result<Scene> {
     })
 }
 
-/// Errors the user can fix (a bad option value, a marker past the mesh, a marker file)
-/// become [`BadInput`]; solver failures stay as they are.
-fn bad_input_if_user(e: modelgap::cloth::ClothError, scene: &str) -> anyhow::Error {
+/// A run's error for the command line: Ctrl-C becomes [`Interrupted`](super::interrupt::Interrupted)
+/// (exit code 130, nothing written); errors the user can fix (a bad option value, a marker
+/// past the mesh, a limit, a marker file) become [`BadInput`], a limit with the option that
+/// raises it; solver failures (a diverged run) stay as they are.
+fn run_error(e: modelgap::cloth::ClothError, scene: &str) -> anyhow::Error {
     use modelgap::cloth::ClothError as E;
-    match e {
-        E::NonFinite { .. } | E::BadTimeStep { .. } => anyhow::Error::new(e),
-        other => BadInput(format!("scene {scene}: {other}")).into(),
-    }
+    let hint = match &e {
+        E::Cancelled { step, steps } => {
+            return super::interrupt::Interrupted(format!(
+                "scene {scene} stopped after step {step} of {steps}; nothing written"
+            ))
+            .into();
+        }
+        E::NonFinite { .. } | E::BadTimeStep { .. } | E::Diverged { .. } => {
+            return anyhow::Error::new(e);
+        }
+        E::TooManyParticles { .. } => "; raise the limit with --max-particles N",
+        E::TooManySteps { .. } => "; raise the limit with --max-steps N, or shorten --duration",
+        E::TooMuchFrameMemory { .. } => {
+            " (--rate HZ, --markers ID,...), or raise the limit with --max-frame-mib MIB"
+        }
+        _ => "",
+    };
+    BadInput(format!("scene {scene}: {e}{hint}")).into()
 }
 
 /// Parses a finite number > 0.
@@ -386,7 +462,7 @@ fn parse_positive(text: &str) -> Result<f64, String> {
     if v > 0.0 && v.is_finite() {
         Ok(v)
     } else {
-        Err(format!("expected a finite number > 0, found {v}"))
+        Err(format!("must be positive and finite, found {v}"))
     }
 }
 

@@ -12,7 +12,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
-use modelgap::cloth::markers::{MarkerRecording, read_markers_path};
+use modelgap::cloth::markers::{MarkerRecording, read_markers_path_within};
 use modelgap::cloth::model::{ClothModel, markers_to_recording, simulate_markers};
 use modelgap::cloth::report::{
     ClothComparison, ErrorMcap, before_after_text, cloth_report, comparison_text, explanation_rms,
@@ -78,7 +78,7 @@ impl ClothLoaded {
     ///
     /// [`BadInput`] for a marker id outside the scene's grid (`label` names the data).
     pub fn new(scene: Scene, markers: MarkerRecording, label: &str) -> anyhow::Result<Self> {
-        check_ids(&scene, &markers, label, None)?;
+        check_ids(&scene, &markers, label)?;
         let rec = markers_to_recording(&markers)?;
         Ok(Self {
             model: ClothModel::new(scene),
@@ -142,9 +142,10 @@ impl ClothLoaded {
 /// # Errors
 ///
 /// [`BadInput`] for bond-graph options (`--set`, `--steady-start`, `--hold linear`), a
-/// missing data file, a marker id outside the grid (naming the line of a CSV file), a
-/// `--noise` for a signal the markers do not hold, a non-positive band; scene and marker
-/// read errors, which name the file, line and field.
+/// missing data file, a `--noise` for a signal the markers do not hold, a non-positive
+/// band; scene and marker read errors, which name the file, line and field (a marker id
+/// outside the grid at the CSV line or MCAP message where it appears); a grid past its
+/// particle limit.
 pub fn load(args: &LoopArgs, scene_path: &Path) -> anyhow::Result<ClothLoaded> {
     if let Some(a) = args.model.set.first() {
         return Err(BadInput(format!(
@@ -165,13 +166,33 @@ pub fn load(args: &LoopArgs, scene_path: &Path) -> anyhow::Result<ClothLoaded> {
     }
     let scene = Scene::from_path(scene_path)
         .with_context(|| format!("loading scene {}", scene_path.display()))?;
+    // The grid's size against its limit, before anything counts on nx × nz.
+    let n_vertices = scene
+        .cloth
+        .n_vertices()
+        .with_context(|| format!("loading scene {}", scene_path.display()))?;
     let path = &args.data;
+    if path.is_dir() {
+        return Err(BadInput(format!(
+            "--data {} is a directory: give a marker recording (.csv or .mcap)",
+            path.display()
+        ))
+        .into());
+    }
     if !path.exists() {
         return Err(BadInput(format!("data file {} not found", path.display())).into());
     }
-    let markers =
-        read_markers_path(path).with_context(|| format!("reading markers {}", path.display()))?;
-    check_ids(&scene, &markers, &path.display().to_string(), Some(path))?;
+    // Ids outside the grid are refused at their own line (or message), before the reader
+    // compares frames and blames a later line.
+    let markers = read_markers_path_within(path, n_vertices).with_context(|| {
+        format!(
+            "reading markers {} for scene {} ({} x {} grid)",
+            path.display(),
+            scene.name,
+            scene.cloth.nx,
+            scene.cloth.nz
+        )
+    })?;
     let rec = markers_to_recording(&markers)?;
     let noise: BTreeMap<String, f64> = args
         .noise
@@ -231,22 +252,15 @@ fn id_list(ids: &[u32]) -> String {
     }
 }
 
-/// Refuses markers whose id is not a vertex of the scene's grid, naming the CSV line where
-/// the id first appears when the file is CSV.
-fn check_ids(
-    scene: &Scene,
-    markers: &MarkerRecording,
-    label: &str,
-    path: Option<&Path>,
-) -> anyhow::Result<()> {
-    let n_vertices = scene.cloth.nx * scene.cloth.nz;
+/// Refuses markers whose id is not a vertex of the scene's grid (markers given in memory;
+/// files are checked line by line as they are read, see [`load`]).
+fn check_ids(scene: &Scene, markers: &MarkerRecording, label: &str) -> anyhow::Result<()> {
+    let n_vertices = scene.cloth.n_vertices()?;
     let Some(&bad) = markers.ids().iter().find(|&&id| id as usize >= n_vertices) else {
         return Ok(());
     };
-    let line = path.and_then(|p| csv_line_of_id(p, bad));
-    let at = line.map_or_else(String::new, |l| format!(" at line {l}"));
     Err(BadInput(format!(
-        "marker id {bad}{at}, field `id`, is outside the mesh of scene {} ({} × {} grid, \
+        "marker id {bad}, field `id`, is outside the mesh of scene {} ({} x {} grid, \
          vertices 0 to {}) in {label}",
         scene.name,
         scene.cloth.nx,
@@ -254,15 +268,6 @@ fn check_ids(
         n_vertices - 1
     ))
     .into())
-}
-
-/// The first line of a marker CSV file whose `id` cell is `id`.
-fn csv_line_of_id(path: &Path, id: u32) -> Option<usize> {
-    let text = std::fs::read_to_string(path).ok()?;
-    text.lines().enumerate().find_map(|(i, l)| {
-        let cell = l.split(',').nth(1)?.trim();
-        (cell.parse::<u32>().ok() == Some(id)).then_some(i + 1)
-    })
 }
 
 /// What a cloth report shows.

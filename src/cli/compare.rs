@@ -62,7 +62,11 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
     if let Some(page) = &page {
         out.push_str(&report_line(page));
     }
-    if before.outputs.iter().any(|o| !o.windows.is_empty()) {
+    if before
+        .outputs
+        .iter()
+        .any(|o| o.finding.is_none() && !o.windows.is_empty())
+    {
         out.push_str(&format!(
             "next: `modelgap explain {}` names the effect that is missing\n",
             args_text(&args.common)

@@ -130,6 +130,7 @@ pub fn cloth_demo_case() -> anyhow::Result<ClothCase> {
 ///
 /// A report that cannot be written; simulation errors (none for the bundled data).
 pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
+    super::model::check_report_dir("--report", &args.report)?;
     let rec = demo_recording()?;
     let case = demo_case();
     let model = BondModel::new(library::builtin(&case.model)?);

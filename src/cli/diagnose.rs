@@ -9,12 +9,10 @@ use modelgap::Threshold;
 use modelgap::bond::BondGraph;
 use modelgap::bond::diagnosis::{Diagnosis, DiagnosisOptions, diagnose, set_text};
 use modelgap::bond::fault_tree::Hypothesis;
-use modelgap::io::read_recording_path;
 use modelgap::residual::stats;
 use serde_json::{Value, json};
 
-use super::BadInput;
-use super::model::{ModelArgs, load, parse_number, steady_state};
+use super::model::{ModelArgs, load, parse_count, parse_number, read_recording_arg, steady_state};
 
 /// Arguments of `modelgap bond diagnose`.
 #[derive(Debug, Args)]
@@ -33,7 +31,7 @@ pub struct DiagnoseArgs {
     threshold: Threshold,
 
     /// Consecutive samples out of the band that make a detection
-    #[arg(long, value_name = "N", default_value_t = 3)]
+    #[arg(long, value_name = "N", default_value_t = 3, value_parser = parse_count, allow_negative_numbers = true)]
     persistence: usize,
 
     /// Start the parallel model at its steady state under the recording's first input values
@@ -73,11 +71,7 @@ pub fn parse_threshold(text: &str) -> Result<Threshold, String> {
 pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
     let g = load(&args.model)?;
     let path = &args.data;
-    if !path.exists() {
-        return Err(BadInput(format!("data file {} not found", path.display())).into());
-    }
-    let rec = read_recording_path(path)
-        .with_context(|| format!("reading recording {}", path.display()))?;
+    let rec = read_recording_arg("--data", "recording", path)?;
     let mut opts = DiagnosisOptions {
         threshold: args.threshold,
         persistence: args.persistence,

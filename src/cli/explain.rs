@@ -9,6 +9,7 @@ use modelgap::story::explanation_text;
 use modelgap::{Comparison, Explanation, Verdict};
 use serde_json::json;
 
+use super::model::parse_whole;
 use super::report::{
     Loaded, LoopArgs, ReportParts, args_text, data_name, explanation_json, json_text, load_loop,
     print_notes, report_line, run_compare, run_explain, stop_if_interrupted, write_report,
@@ -26,7 +27,7 @@ pub struct ExplainArgs {
     pub json: bool,
 
     /// How many ranked candidates to print
-    #[arg(long, value_name = "N", default_value_t = 8)]
+    #[arg(long, value_name = "N", default_value_t = 8, value_parser = parse_whole, allow_negative_numbers = true)]
     pub top: usize,
 }
 

@@ -12,6 +12,7 @@ use modelgap::story::{explanation_text, verdict_sentence};
 use modelgap::{Effect, EffectKind, Explanation, Model as _, RankedCandidate, Verdict};
 
 use super::BadInput;
+use super::model::parse_whole;
 use super::report::{
     LoopArgs, ReportParts, args_text_with_model, before_after_text, data_name, load_loop,
     print_notes, report_line, run_compare, run_explain, stop_if_interrupted, write_report,
@@ -34,7 +35,7 @@ pub struct FixArgs {
     pub out: PathBuf,
 
     /// How many ranked candidates to print
-    #[arg(long, value_name = "N", default_value_t = 5)]
+    #[arg(long, value_name = "N", default_value_t = 5, value_parser = parse_whole, allow_negative_numbers = true)]
     pub top: usize,
 }
 
@@ -312,12 +313,14 @@ pub fn effect_line(r: &RankedCandidate) -> String {
     }
 }
 
-/// Refuses an `--out` that is the input model file or a directory.
+/// Refuses an `--out` that is the input model file, a directory, or in a directory that
+/// does not exist.
 ///
 /// # Errors
 ///
 /// [`BadInput`] naming the path.
 pub(super) fn check_out(out: &Path, model_file: Option<&Path>) -> anyhow::Result<()> {
+    super::model::check_out_dir("--out", out)?;
     if out.is_dir() {
         return Err(BadInput(format!(
             "--out {} is a directory: give the new model file's name",

@@ -150,15 +150,25 @@ fn cloth_exit_code(e: &ClothError) -> u8 {
         ClothError::Core(core) => core_exit_code(core),
         // A simulation that blew up is a failure; scene and marker files are fixed by
         // changing the input.
-        ClothError::NonFinite { .. } => EXIT_FAILURE,
+        ClothError::NonFinite { .. } | ClothError::Diverged { .. } => EXIT_FAILURE,
         _ => EXIT_BAD_INPUT,
     }
 }
 
 fn bond_exit_code(e: &BondError) -> u8 {
     match e {
+        // The solver gave up (step size, step budget, a singular matrix): a failure.
         BondError::Ode(_) => EXIT_FAILURE,
         BondError::Core(core) => core_exit_code(core),
+        // A parameter the element cannot have, a law that is NaN at the start, a run past a
+        // limit: fixed by changing the input.
+        BondError::UnphysicalParameter { .. }
+        | BondError::LawNotFinite { .. }
+        | BondError::TooLarge { .. } => EXIT_BAD_INPUT,
+        // The adaptive solvers control their error and the exact one is exact: a state that
+        // stops being finite is the solution of the model as given (its values, its inputs)
+        // running away (`--set k=1e300`), not a solver failure.
+        BondError::NonFiniteState { .. } | BondError::NonFiniteOutput { .. } => EXIT_BAD_INPUT,
         // Model files, names, causality, inputs, options: all fixed by changing the input.
         _ => EXIT_BAD_INPUT,
     }
@@ -212,6 +222,31 @@ mod tests {
         let e = anyhow::Error::new(BondError::BadOptions("x".into())).context("simulating");
         assert_eq!(exit_code(&e), 2);
         let e = anyhow::anyhow!("something else");
+        assert_eq!(exit_code(&e), 1);
+        // Issue 11: a parameter the user set badly is bad input, however it shows.
+        let e = anyhow::Error::new(BondError::UnphysicalParameter {
+            param: "L".into(),
+            expression: false,
+            element: "L".into(),
+            kind: modelgap::bond::ElementKind::I,
+            quantity: "inductance, H".into(),
+            expected: "positive",
+            value: 0.0,
+        })
+        .context("applying --set L=0");
+        assert_eq!(exit_code(&e), 2);
+        let e = anyhow::Error::new(BondError::NonFiniteState {
+            state: "p3".into(),
+            what: "the momentum of I:L".into(),
+            t: 0.001,
+        });
+        assert_eq!(exit_code(&e), 2);
+        let e = anyhow::Error::new(BondError::Ode(
+            modelgap::bond::ode::OdeError::TooManySteps {
+                t: 1.0,
+                max_steps: 10,
+            },
+        ));
         assert_eq!(exit_code(&e), 1);
     }
 

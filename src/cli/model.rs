@@ -1,16 +1,21 @@
 //! The model every `bond` subcommand takes: `--model` (a file or a built-in name) and
-//! `--set NAME=VALUE`; and the steady state that `--steady-start` starts from.
+//! `--set NAME=VALUE`; the steady state that `--steady-start` starts from; and what the
+//! options of every subcommand share: number parsers whose messages say what was expected,
+//! and reading a recording given by an option (`--data`, `--inputs`).
 
 use std::path::Path;
 
 use anyhow::Context as _;
 use clap::Args;
+use modelgap::Recording;
 use modelgap::bond::BondGraph;
 use modelgap::bond::compiled::CompiledModel;
 use modelgap::bond::file::read_model_path;
 use modelgap::bond::library::{self, BUILTINS};
+use modelgap::io::read_recording_path;
 
 use super::BadInput;
+use super::format::num;
 
 /// Which model to use and which of its values to change.
 #[derive(Debug, Args)]
@@ -60,6 +65,121 @@ pub fn parse_number(text: &str) -> Result<f64, String> {
     }
 }
 
+/// Parses a finite number > 0 (clap puts the option's name in front of the message).
+pub fn parse_positive(text: &str) -> Result<f64, String> {
+    let v = parse_number(text)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be positive, found {v}"))
+    }
+}
+
+/// Parses a duration in seconds > 0.
+pub fn parse_seconds(text: &str) -> Result<f64, String> {
+    let v = parse_number(text)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be positive, found {v} s"))
+    }
+}
+
+/// Parses a rate in Hz > 0.
+pub fn parse_hertz(text: &str) -> Result<f64, String> {
+    let v = parse_number(text)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be positive, found {v} Hz"))
+    }
+}
+
+/// Parses a whole number ≥ 1 (a count); a negative or fractional number is named as such.
+pub fn parse_count(text: &str) -> Result<usize, String> {
+    let text = text.trim();
+    match text.parse::<usize>() {
+        Ok(0) => Err("must be at least 1, found 0".to_owned()),
+        Ok(n) => Ok(n),
+        Err(_) => match text.parse::<f64>() {
+            Ok(v) if v < 1.0 => Err(format!("must be at least 1, found {text}")),
+            Ok(_) => Err(format!("must be a whole number, found {text}")),
+            Err(_) => Err(format!("expected a whole number >= 1, found `{text}`")),
+        },
+    }
+}
+
+/// Parses a whole number ≥ 0 (how many lines to print); a negative or fractional number is
+/// named as such.
+pub fn parse_whole(text: &str) -> Result<usize, String> {
+    let text = text.trim();
+    text.parse::<usize>()
+        .map_err(|_| match text.parse::<f64>() {
+            Ok(v) if v < 0.0 => format!("must be 0 or more, found {text}"),
+            Ok(_) => format!("must be a whole number, found {text}"),
+            Err(_) => format!("expected a whole number >= 0, found `{text}`"),
+        })
+}
+
+/// Refuses a file to write (`--out`) whose directory does not exist, before any work.
+///
+/// # Errors
+///
+/// [`BadInput`] naming the option, the path and the missing directory.
+pub fn check_out_dir(option: &str, path: &Path) -> anyhow::Result<()> {
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() && !dir.is_dir() => Err(BadInput(format!(
+            "{option} {}: directory {} does not exist",
+            path.display(),
+            dir.display()
+        ))
+        .into()),
+        _ => Ok(()),
+    }
+}
+
+/// Refuses a report directory (`--report`) that is an existing file, before any work.
+///
+/// # Errors
+///
+/// [`BadInput`] naming the option and the path.
+pub fn check_report_dir(option: &str, dir: &Path) -> anyhow::Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(BadInput(format!(
+            "{option} {} is a file: give a directory (report.html and comparison.mcap are \
+             written into it)",
+            dir.display()
+        ))
+        .into());
+    }
+    Ok(())
+}
+
+/// Reads the recording an option names (`--data`, `--inputs`): a missing file or a
+/// directory is refused with the option and the path.
+///
+/// # Errors
+///
+/// [`BadInput`] for a path that does not exist or is a directory; the reader's errors (with
+/// the line and column) under the context `reading <what> <path>`.
+pub fn read_recording_arg(option: &str, what: &str, path: &Path) -> anyhow::Result<Recording> {
+    if path.is_dir() {
+        return Err(BadInput(format!(
+            "{option} {} is a directory: give a recording file (.csv or .mcap)",
+            path.display()
+        ))
+        .into());
+    }
+    if !path.exists() {
+        return Err(BadInput(format!(
+            "{option}: {what} file {} not found",
+            path.display()
+        ))
+        .into());
+    }
+    read_recording_path(path).with_context(|| format!("reading {what} {}", path.display()))
+}
+
 /// The built-in model names, comma-separated.
 pub fn builtin_names() -> String {
     BUILTINS
@@ -78,11 +198,20 @@ pub fn builtin_names() -> String {
 /// does not read, a `--set` of an unknown name.
 pub fn load(args: &ModelArgs) -> anyhow::Result<BondGraph> {
     let path = Path::new(&args.model);
+    // A directory that happens to share a built-in's name does not hide the built-in.
+    if path.is_dir() && library::builtin(&args.model).is_err() {
+        return Err(BadInput(format!(
+            "--model {} is a directory: give a model file (.toml) or a built-in model ({})",
+            path.display(),
+            builtin_names()
+        ))
+        .into());
+    }
     let mut g = if path.is_file() {
         read_model_path(path).with_context(|| format!("loading model {}", path.display()))?
     } else if looks_like_path(&args.model) {
         return Err(BadInput(format!(
-            "model file {} not found (built-in models: {})",
+            "--model: model file {} not found (built-in models: {})",
             path.display(),
             builtin_names()
         ))
@@ -97,7 +226,7 @@ pub fn load(args: &ModelArgs) -> anyhow::Result<BondGraph> {
     };
     for a in &args.set {
         g.set_param(&a.name, a.value)
-            .with_context(|| format!("applying --set {}={}", a.name, a.value))?;
+            .with_context(|| format!("applying --set {}={}", a.name, num(a.value)))?;
     }
     Ok(g)
 }
@@ -116,6 +245,8 @@ fn looks_like_path(text: &str) -> bool {
 /// such as a free integrator, or no convergence).
 pub fn steady_state(g: &BondGraph, u: &[f64]) -> anyhow::Result<Vec<f64>> {
     let model = CompiledModel::new(g)?;
+    // A law that is NaN where Newton starts is named, not reported as "no convergence".
+    model.check_finite(0.0, &vec![0.0; model.n_states()], u, true)?;
     model
         .steady_state(u, None)
         .map_err(|e| BadInput(format!("model {} has no steady state: {e}", g.name)).into())

@@ -28,7 +28,10 @@ use modelgap::{
 use serde_json::{Map, Value, json};
 
 use super::BadInput;
-use super::model::{Assignment, ModelArgs, load, parse_assignment};
+use super::model::{
+    Assignment, ModelArgs, check_report_dir, load, parse_assignment, parse_positive,
+    read_recording_arg,
+};
 
 /// The arguments every loop command takes: the model, the recording and how to hold one
 /// against the other.
@@ -66,13 +69,15 @@ pub struct LoopArgs {
         long,
         value_name = "K",
         default_value_t = 4.0,
-        conflicts_with = "band_fraction"
+        conflicts_with = "band_fraction",
+        value_parser = parse_positive,
+        allow_negative_numbers = true
     )]
     pub band_sigmas: f64,
 
     /// Failure band: this fraction of each output's steady state instead (the DC-motor
     /// paper's threshold is 0.02)
-    #[arg(long, value_name = "F")]
+    #[arg(long, value_name = "F", value_parser = parse_positive, allow_negative_numbers = true)]
     pub band_fraction: Option<f64>,
 }
 
@@ -141,20 +146,19 @@ impl Loaded {
 ///
 /// # Errors
 ///
-/// [`BadInput`] for a missing data file (naming it), a recording that measures none of the
-/// model's outputs (naming both sides) and a `--noise` for an output the model does not
-/// predict; model and recording read errors, with the file in the context.
+/// [`BadInput`] for a missing data file or a directory (naming it), a recording that
+/// measures none of the model's outputs (naming both sides) and a `--noise` for an output
+/// the model does not predict; model and recording read errors, with the file in the context.
 pub fn load_loop(args: &LoopArgs) -> anyhow::Result<Loaded> {
     let graph = load(&args.model)?;
     let model_file = Path::new(&args.model.model)
         .is_file()
         .then(|| PathBuf::from(&args.model.model));
-    let path = &args.data;
-    if !path.exists() {
-        return Err(BadInput(format!("data file {} not found", path.display())).into());
+    if let Some(dir) = &args.report {
+        check_report_dir("--report", dir)?;
     }
-    let rec = modelgap::io::read_recording_path(path)
-        .with_context(|| format!("reading recording {}", path.display()))?;
+    let path = &args.data;
+    let rec = read_recording_arg("--data", "recording", path)?;
     let start = if args.steady_start {
         Start::SteadyState
     } else {
@@ -521,6 +525,8 @@ pub fn comparison_json(c: &Comparison) -> Value {
                 "band": finite(o.band),
                 "windows": windows,
                 "effective_samples": finite(o.effective_samples),
+                "quantum": o.quantum.map(finite),
+                "not_judged": o.finding,
             })
         })
         .collect();
@@ -529,6 +535,7 @@ pub fn comparison_json(c: &Comparison) -> Value {
         "samples": c.t.len(),
         "duration": finite(c.t.last().copied().unwrap_or(0.0) - c.t.first().copied().unwrap_or(0.0)),
         "outputs": outputs,
+        "warnings": c.warnings,
     })
 }
 

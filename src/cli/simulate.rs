@@ -6,20 +6,21 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 use clap::{Args, ValueEnum};
-use modelgap::bond::BondGraph;
 use modelgap::bond::compiled::CompiledModel;
 use modelgap::bond::simulate::{
-    Drive, Hold, Inputs, ParamChange, Run, SimOptions, Solver, simulate, time_grid,
+    DEFAULT_MAX_EVENTS, DEFAULT_MAX_SAMPLES, Drive, Hold, Inputs, ParamChange, Run, SimOptions,
+    Solver, checked_time_grid, simulate,
 };
-use modelgap::io::{Format, read_recording_path, write_recording_path};
+use modelgap::bond::{BondError, BondGraph};
+use modelgap::io::{Format, write_recording_path};
 
 use super::BadInput;
 use super::format::{Align, aligned, num, unit};
-use super::model::{ModelArgs, load, parse_number, steady_state};
+use super::model::{
+    ModelArgs, check_out_dir, load, parse_count, parse_hertz, parse_number, parse_seconds,
+    read_recording_arg, steady_state,
+};
 use super::noise::{NoiseSpec, add_noise, parse_noise};
-
-/// The most output samples a run may have (memory: a few hundred MB at most).
-const MAX_SAMPLES: f64 = 5e7;
 
 /// Arguments of `modelgap bond simulate`.
 #[derive(Debug, Args)]
@@ -41,20 +42,36 @@ pub struct SimulateArgs {
     hold: HoldArg,
 
     /// Simulated time (s) [default: up to the last sample of --inputs, else 1]
-    #[arg(long, value_name = "T", value_parser = parse_positive)]
+    #[arg(long, value_name = "T", value_parser = parse_seconds, allow_negative_numbers = true)]
     duration: Option<f64>,
 
     /// Output sample rate (Hz)
-    #[arg(long, value_name = "HZ", default_value_t = 1000.0, value_parser = parse_positive)]
+    #[arg(
+        long,
+        value_name = "HZ",
+        default_value_t = 1000.0,
+        value_parser = parse_hertz,
+        allow_negative_numbers = true
+    )]
     rate: f64,
+
+    /// The most output samples (duration x rate + 1) a run may write; raise it for a long or
+    /// fast run that is meant
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_SAMPLES, value_parser = parse_count, allow_negative_numbers = true)]
+    max_samples: usize,
+
+    /// The most discontinuities (PWM edges, two per period, and --fault changes) a run may
+    /// have; raise it for a fast PWM over a long run that is meant
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_EVENTS, value_parser = parse_count, allow_negative_numbers = true)]
+    max_events: usize,
 
     /// Integrator: exact (linear models), dopri5 (explicit), rosenbrock (stiff), auto
     #[arg(long, value_enum, default_value_t = SolverArg::Auto)]
     solver: SolverArg,
 
-    /// A parameter jumps to a new value at time T (s), an abrupt fault: NAME=VALUE@T;
+    /// A parameter jumps to a new value at time TIME (s), an abrupt fault: NAME=VALUE@TIME;
     /// repeatable
-    #[arg(long = "fault", value_name = "NAME=VALUE@T", value_parser = parse_fault)]
+    #[arg(long = "fault", value_name = "NAME=VALUE@TIME", value_parser = parse_fault)]
     fault: Vec<ParamChange>,
 
     /// Start at the steady state under the inputs' values at t = 0 (a PWM counts as its
@@ -64,7 +81,7 @@ pub struct SimulateArgs {
 
     /// Add white Gaussian noise to every output: SIGMA (in the output's unit) and an
     /// optional seed (default 0)
-    #[arg(long, value_name = "SIGMA[,seed=N]", value_parser = parse_noise)]
+    #[arg(long, value_name = "SIGMA[,seed=N]", value_parser = parse_noise, allow_hyphen_values = true)]
     noise: Option<NoiseSpec>,
 
     /// Write time, inputs and outputs to this file (.csv or .mcap)
@@ -163,14 +180,14 @@ pub fn parse_input(text: &str) -> Result<InputDrive, String> {
     })
 }
 
-/// Parses `NAME=VALUE@T`: the parameter `NAME` takes `VALUE` from time `T` (s) on.
+/// Parses `NAME=VALUE@TIME`: the parameter `NAME` takes `VALUE` from time `TIME` (s) on.
 pub fn parse_fault(text: &str) -> Result<ParamChange, String> {
     let (name, rest) = text
         .split_once('=')
-        .ok_or_else(|| format!("expected NAME=VALUE@T, found `{text}`"))?;
+        .ok_or_else(|| format!("expected NAME=VALUE@TIME, found `{text}`"))?;
     let (value, at) = rest
         .split_once('@')
-        .ok_or_else(|| format!("expected NAME=VALUE@T, found `{text}` (no @T)"))?;
+        .ok_or_else(|| format!("expected NAME=VALUE@TIME, found `{text}` (no @TIME)"))?;
     let name = name.trim();
     if name.is_empty() {
         return Err(format!("no parameter name in `{text}`"));
@@ -189,16 +206,6 @@ pub fn parse_fault(text: &str) -> Result<ParamChange, String> {
     })
 }
 
-/// Parses a finite number > 0.
-fn parse_positive(text: &str) -> Result<f64, String> {
-    let v = parse_number(text)?;
-    if v > 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("expected a number > 0, found {v}"))
-    }
-}
-
 /// Simulates the model and prints a summary.
 ///
 /// # Errors
@@ -208,20 +215,23 @@ fn parse_positive(text: &str) -> Result<f64, String> {
 pub fn run(args: &SimulateArgs) -> anyhow::Result<()> {
     let g = load(&args.model)?;
     if let Some(path) = &args.out {
-        // Refuse an unknown extension before the simulation, not after it.
+        // Refuse a directory or an unknown extension before the simulation, not after it.
+        if path.is_dir() {
+            return Err(BadInput(format!(
+                "--out {} is a directory: give the file to write (.csv or .mcap)",
+                path.display()
+            ))
+            .into());
+        }
         Format::from_path(path)
-            .with_context(|| format!("choosing the format of {}", path.display()))?;
+            .with_context(|| format!("choosing the format of --out {}", path.display()))?;
+        check_out_dir("--out", path)?;
     }
     let model = CompiledModel::new(&g).with_context(|| format!("compiling model {}", g.name))?;
     let (inputs, described, file_end) = drives(args, &g, &model)?;
     let duration = args.duration.or(file_end).unwrap_or(1.0);
-    if duration * args.rate > MAX_SAMPLES {
-        return Err(BadInput(format!(
-            "{duration} s at {} Hz is more than {MAX_SAMPLES} samples; lower --rate or --duration",
-            args.rate
-        ))
-        .into());
-    }
+    // Checked before anything is allocated: a typo in --rate must not exhaust memory.
+    let t = checked_time_grid(duration, args.rate, args.max_samples).map_err(limit_hint)?;
     for change in &args.fault {
         if !g.params().contains_key(&change.name) && !g.inputs().contains_key(&change.name) {
             return Err(BadInput(format!(
@@ -233,10 +243,22 @@ pub fn run(args: &SimulateArgs) -> anyhow::Result<()> {
             ))
             .into());
         }
+        // A value the element cannot have is refused before the run, naming the option.
+        g.clone()
+            .set_param(&change.name, change.value)
+            .with_context(|| {
+                format!(
+                    "checking --fault {}={}@{}",
+                    change.name,
+                    num(change.value),
+                    num(change.at)
+                )
+            })?;
     }
     let mut opts = SimOptions {
         solver: args.solver.into(),
         changes: args.fault.clone(),
+        max_events: args.max_events,
         ..SimOptions::default()
     };
     if args.steady_start {
@@ -251,9 +273,9 @@ pub fn run(args: &SimulateArgs) -> anyhow::Result<()> {
                 .with_context(|| format!("finding the steady state of model {}", g.name))?,
         );
     }
-    let t = time_grid(duration, args.rate);
-    let mut run =
-        simulate(&g, &inputs, &t, &opts).with_context(|| format!("simulating model {}", g.name))?;
+    let mut run = simulate(&g, &inputs, &t, &opts)
+        .map_err(limit_hint)
+        .with_context(|| format!("simulating model {}", g.name))?;
     if let Some(noise) = args.noise {
         add_noise(&mut run.outputs, noise);
     }
@@ -360,12 +382,37 @@ fn drives(
     Ok((inputs, described, file_end))
 }
 
-/// Reads `--inputs`, naming the path when it is missing.
+/// Reads `--inputs`, naming the option and the path when it is missing or a directory.
 fn read_inputs_file(path: &Path) -> anyhow::Result<modelgap::Recording> {
-    if !path.exists() {
-        return Err(BadInput(format!("inputs file {} not found", path.display())).into());
-    }
-    read_recording_path(path).with_context(|| format!("reading inputs from {}", path.display()))
+    read_recording_arg("--inputs", "inputs", path)
+}
+
+/// A limit of the library ([`BondError::TooLarge`]) as the option that raises it here:
+/// `--max-samples` or `--max-events`; other errors unchanged.
+fn limit_hint(e: BondError) -> anyhow::Error {
+    let BondError::TooLarge {
+        what,
+        count,
+        limit,
+        option,
+    } = &e
+    else {
+        return e.into();
+    };
+    let (flag, lower) = match *option {
+        "max_samples" => ("--max-samples", "lower --rate or --duration"),
+        "max_events" => (
+            "--max-events",
+            "lower the PWM frequency or --duration, or use fewer --fault changes",
+        ),
+        _ => return e.into(),
+    };
+    BadInput(format!(
+        "{what} would be {}, more than the limit {flag} {limit}: {lower}, or raise {flag} if the \
+         run is meant",
+        num(*count)
+    ))
+    .into()
 }
 
 /// The value a drive has at t = 0; a PWM counts as its average (the steady state of the

@@ -6,6 +6,8 @@ use anyhow::Context as _;
 use clap::Args;
 use modelgap::bond::table7::{Table7Options, table7, table7_text};
 
+use super::model::{parse_hertz, parse_number};
+
 /// Arguments of `modelgap bond table7`.
 #[derive(Debug, Args)]
 pub struct Table7Args {
@@ -13,12 +15,12 @@ pub struct Table7Args {
     #[arg(long)]
     json: bool,
 
-    /// Relative size of each fault
-    #[arg(long, default_value_t = 0.2)]
+    /// Relative size of each fault, in (0, 1)
+    #[arg(long, value_name = "F", default_value_t = 0.2, value_parser = parse_number, allow_negative_numbers = true)]
     magnitude: f64,
 
     /// Sample rate of the simulated recordings (Hz)
-    #[arg(long, default_value_t = 1000.0)]
+    #[arg(long, value_name = "HZ", default_value_t = 1000.0, value_parser = parse_hertz, allow_negative_numbers = true)]
     rate: f64,
 }
 

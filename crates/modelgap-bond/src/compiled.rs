@@ -4,10 +4,27 @@
 use std::collections::BTreeMap;
 
 use crate::causality::assign_causality;
-use crate::equations::Equations;
-use crate::error::{BondError, Result};
+use crate::element::{ElementKind, Law};
+use crate::equations::{EquationKind, Equations};
+use crate::error::{BondError, Result, num};
 use crate::expr::{Expr, Leaf, Tape, TapeBuilder, Var};
 use crate::graph::BondGraph;
+
+/// One element law as compiled: where its result lands and what it reads,
+/// so that a law that is not finite can be named with its arguments.
+#[derive(Clone, Debug)]
+struct LawSite {
+    /// The element.
+    element: String,
+    /// Which law (`effort`, `flow`, `parameter`, `modulus`, `value`).
+    field: &'static str,
+    /// The law as written in the model.
+    text: String,
+    /// Slot of the variable the law computes.
+    target: usize,
+    /// What the law reads, as printed (`f`, `m`, `t`), with its slot.
+    args: Vec<(String, usize)>,
+}
 
 /// A model ready to evaluate: `ẋ = f(t, x, u)` and `y = g(t, x, u)`.
 ///
@@ -24,6 +41,10 @@ pub struct CompiledModel {
     var_slots: Vec<(Var, usize)>,
     /// State names (`p3`, `p8`), in state order.
     pub state_names: Vec<String>,
+    /// What each state is (`the momentum of I:L`), in state order.
+    pub state_descriptions: Vec<String>,
+    /// The element laws in evaluation order, to name one that is not finite.
+    laws: Vec<LawSite>,
     /// Input names, in input order (the graph's order).
     pub input_names: Vec<String>,
     /// Default value of each input.
@@ -131,6 +152,7 @@ impl CompiledModel {
                     .join(", "),
                 detail: "reads a variable no equation computes".to_string(),
             })?;
+        let laws = law_sites(g, eqs, &slots, &input_slot);
         let var_slots = slots.iter().map(|(v, s)| (*v, *s)).collect();
         let is_state_affine = eqs
             .states
@@ -146,6 +168,20 @@ impl CompiledModel {
             deriv_slots,
             output_slots,
             state_names: eqs.states.iter().map(|s| s.var.to_string()).collect(),
+            state_descriptions: eqs
+                .states
+                .iter()
+                .map(|s| {
+                    let el = g.element(s.element);
+                    let what = if matches!(s.var, Var::P(_)) {
+                        "momentum"
+                    } else {
+                        "displacement"
+                    };
+                    format!("the {what} of {}:{}", el.kind, el.name)
+                })
+                .collect(),
+            laws,
             input_names: eqs.inputs.clone(),
             input_defaults: eqs
                 .inputs
@@ -274,10 +310,169 @@ impl CompiledModel {
         ))
     }
 
+    /// The error for state `component` (or its derivative) found not finite
+    /// at time `t` (s) by a solver: [`BondError::NonFiniteState`] with the
+    /// state's name and element.
+    pub fn non_finite_state(&self, component: usize, t: f64) -> BondError {
+        BondError::NonFiniteState {
+            state: self
+                .state_names
+                .get(component)
+                .cloned()
+                .unwrap_or_else(|| format!("#{component}")),
+            what: self
+                .state_descriptions
+                .get(component)
+                .cloned()
+                .unwrap_or_else(|| "unknown".to_string()),
+            t,
+        }
+    }
+
+    /// Checks that every state derivative and output is finite at
+    /// `(t, x, u)`; `start` says that this is where a simulation starts (for
+    /// the message).
+    ///
+    /// # Errors
+    /// [`BondError::LawNotFinite`] naming the first law (in evaluation
+    /// order) that is not finite although what it reads is, with the law
+    /// text and its arguments' values; else [`BondError::NonFiniteState`] or
+    /// [`BondError::NonFiniteOutput`] for the first derivative or output
+    /// that is not finite.
+    pub fn check_finite(&self, t: f64, x: &[f64], u: &[f64], start: bool) -> Result<()> {
+        let mut scratch = self.scratch();
+        self.eval(t, x, u, &mut scratch);
+        let bad_state = self
+            .deriv_slots
+            .iter()
+            .zip(x)
+            .position(|(&s, xi)| !(scratch[s].is_finite() && xi.is_finite()));
+        let bad_output = self
+            .output_slots
+            .iter()
+            .position(|&s| !scratch[s].is_finite());
+        if bad_state.is_none() && bad_output.is_none() {
+            return Ok(());
+        }
+        for law in &self.laws {
+            let value = scratch[law.target];
+            if value.is_finite() || law.args.iter().any(|(_, s)| !scratch[*s].is_finite()) {
+                continue;
+            }
+            let args = law
+                .args
+                .iter()
+                .map(|(name, s)| {
+                    let unit = if name == "t" { " s" } else { "" };
+                    format!("{name} = {}{unit}", num(scratch[*s]))
+                })
+                .collect::<Vec<_>>()
+                .join(", ");
+            let place = if start {
+                "at the start".to_string()
+            } else {
+                format!("at t = {} s", num(t))
+            };
+            return Err(BondError::LawNotFinite {
+                element: law.element.clone(),
+                field: law.field.to_string(),
+                law: law.text.clone(),
+                value,
+                point: if args.is_empty() {
+                    place
+                } else {
+                    format!("{place} ({args})")
+                },
+            });
+        }
+        match (bad_state, bad_output) {
+            (Some(i), _) => Err(self.non_finite_state(i, t)),
+            (None, Some(o)) => Err(BondError::NonFiniteOutput {
+                output: self.output_names[o].clone(),
+                t,
+            }),
+            (None, None) => Ok(()),
+        }
+    }
+
     /// Slot of input `j` in the scratch buffer (for drivers that write inputs in place).
     pub fn input_slot(&self, j: usize) -> usize {
         1 + self.n_states + j
     }
+}
+
+/// The element laws of the equations, in evaluation order, with the law
+/// text as written and what each reads (an element's own bond variable by
+/// its local name, `e`, `f`, `p` or `q`).
+fn law_sites(
+    g: &BondGraph,
+    eqs: &Equations,
+    slots: &BTreeMap<Var, usize>,
+    input_slot: &BTreeMap<&str, usize>,
+) -> Vec<LawSite> {
+    let mut out = Vec::new();
+    for &i in &eqs.order {
+        let eq = &eqs.equations[i];
+        if !matches!(eq.kind, EquationKind::Law | EquationKind::Source) {
+            continue;
+        }
+        let Some(&target) = slots.get(&eq.target) else {
+            continue;
+        };
+        let el = g.element(eq.element);
+        let produces_effort = matches!(eq.target, Var::E(_) | Var::Pdot(_));
+        let (field, law) = match (&el.law, el.kind) {
+            (Law::Source(e), ElementKind::Se) => ("effort", e),
+            (Law::Source(e), _) => ("flow", e),
+            (Law::Linear(e), k) if k.is_two_port() => ("modulus", e),
+            (Law::Linear(e), _) => ("parameter", e),
+            (Law::Nonlinear { effort, flow }, _) => {
+                match (produces_effort, effort.as_ref(), flow.as_ref()) {
+                    (true, Some(e), _) => ("effort", e),
+                    (false, _, Some(f)) => ("flow", f),
+                    (_, Some(e), None) => ("effort", e),
+                    (_, None, Some(f)) => ("flow", f),
+                    (_, None, None) => continue,
+                }
+            }
+            (Law::None, _) => continue,
+        };
+        // One-ports name their own bond's variables as the law does.
+        let own_bond = match g.ports(eq.element).as_slice() {
+            [(b, _)] => Some(b.number()),
+            _ => None,
+        };
+        let mut args = Vec::new();
+        for v in eq.rhs.vars() {
+            let Some(&slot) = slots.get(&v) else {
+                continue;
+            };
+            let local = match v {
+                Var::E(n) if Some(n) == own_bond => "e".to_string(),
+                Var::F(n) if Some(n) == own_bond => "f".to_string(),
+                Var::P(n) if Some(n) == own_bond => "p".to_string(),
+                Var::Q(n) if Some(n) == own_bond => "q".to_string(),
+                other => other.to_string(),
+            };
+            args.push((local, slot));
+        }
+        for name in eq.rhs.inputs() {
+            if let Some(&slot) = input_slot.get(name.as_str()) {
+                args.push((name, slot));
+            }
+        }
+        if eq.rhs.depends_on_time() {
+            args.push(("t".to_string(), 0));
+        }
+        out.push(LawSite {
+            element: el.name.clone(),
+            field,
+            text: law.to_string(),
+            target,
+            args,
+        });
+    }
+    out
 }
 
 /// What a variable depends on, from least to most: a constant, inputs only

@@ -38,8 +38,14 @@ pub enum BondError {
         /// The known names, comma-separated.
         known: String,
     },
-    /// A parameter value is not finite.
-    #[error("parameter '{name}' must be finite, found {value}")]
+    /// A parameter value (or an input's default) is not finite, or beyond
+    /// [`MAX_MAGNITUDE`](modelgap_core::recording::MAX_MAGNITUDE), the limit
+    /// recordings have too: a model value past it overflows the first product.
+    #[error(
+        "parameter '{name}' must be finite and at most {} in magnitude, found {}",
+        num(modelgap_core::recording::MAX_MAGNITUDE),
+        num(*value)
+    )]
     BadParameter {
         /// The parameter.
         name: String,
@@ -180,23 +186,122 @@ pub enum BondError {
         /// The known built-ins.
         known: String,
     },
+    /// The coefficient of a linear R, C or I element has a value the element
+    /// cannot physically have: an inductance, inertia, mass or capacitance
+    /// that is not positive, a resistance that is negative.
+    #[error(
+        "{} of element {element} ({kind}: {quantity}) must be {expected}, found {}",
+        coefficient(param, *expression),
+        num(*value)
+    )]
+    UnphysicalParameter {
+        /// The parameter (`L`), or the coefficient's law text when it is an
+        /// expression of parameters (`(J) + dJ`).
+        param: String,
+        /// True when `param` is a law text rather than a parameter's name.
+        expression: bool,
+        /// The element.
+        element: String,
+        /// Its kind (R, C or I).
+        kind: crate::element::ElementKind,
+        /// What the coefficient is, with its unit when known (`inductance, H`).
+        quantity: String,
+        /// What it must be (`positive`, `zero or positive`).
+        expected: &'static str,
+        /// The value found.
+        value: f64,
+    },
+    /// A law evaluates to NaN or an infinity where the model starts (or, for
+    /// a constant coefficient, anywhere).
+    #[error("the {field} law of element {element}, `{law}`, is {} {point}", num(*value))]
+    LawNotFinite {
+        /// The element.
+        element: String,
+        /// Which law (`effort`, `flow`, `parameter`, `modulus`, `value`).
+        field: String,
+        /// The law as written (`f/0`).
+        law: String,
+        /// What it evaluates to (NaN or ±inf).
+        value: f64,
+        /// Where: `at the start (t = 0 s, f = 0)`, or `whatever the state` for a constant.
+        point: String,
+    },
+    /// A state or its derivative stopped being finite during a simulation.
+    #[error("state {state} ({what}) or its derivative is not finite at t = {} s", num(*t))]
+    NonFiniteState {
+        /// The state's name (`p3`).
+        state: String,
+        /// What it is (`the momentum of I:L`).
+        what: String,
+        /// The time of the last finite state (s).
+        t: f64,
+    },
+    /// An output is not finite although the states are.
+    #[error("output {output} is not finite at t = {} s", num(*t))]
+    NonFiniteOutput {
+        /// The output's name.
+        output: String,
+        /// The time (s).
+        t: f64,
+    },
+    /// A run would need more of something than a limit allows; checked
+    /// before any work, so that a typo (a PWM at 1 THz) cannot exhaust memory.
+    #[error("{what} would be {}, more than the limit of {limit} ({option})", num(*count))]
+    TooLarge {
+        /// What is counted, with where it comes from
+        /// (`switching edges of the PWM on input m, 1e12 Hz over 1 s`).
+        what: String,
+        /// How many there would be.
+        count: f64,
+        /// The limit.
+        limit: usize,
+        /// The option that sets the limit (`max_events`, `max_samples`).
+        option: &'static str,
+    },
     /// Simulation options are invalid.
     #[error("bad simulation options: {0}")]
     BadOptions(String),
-    /// The ODE solver failed.
+    /// The ODE solver failed. The solver's error is part of the message and
+    /// not a separate cause, so that it is printed once.
     #[error("simulation failed: {0}")]
-    Ode(#[from] crate::ode::OdeError),
+    Ode(crate::ode::OdeError),
     /// A recording could not be used.
     #[error(transparent)]
     Core(#[from] modelgap_core::CoreError),
-    /// An I/O error.
-    #[error("{message}: {source}")]
+    /// An I/O error. The operating system's error is part of the message and
+    /// not a separate cause, so that it is printed once.
+    #[error("{message}: {error}")]
     Io {
         /// What was being done, with the path.
         message: String,
         /// The underlying error.
-        source: std::io::Error,
+        error: std::io::Error,
     },
+}
+
+impl From<crate::ode::OdeError> for BondError {
+    fn from(e: crate::ode::OdeError) -> BondError {
+        BondError::Ode(e)
+    }
+}
+
+/// `parameter L`, or ``the coefficient `(J) + dJ` `` for an expression.
+fn coefficient(param: &str, expression: bool) -> String {
+    if expression {
+        format!("the coefficient `{param}`")
+    } else {
+        format!("parameter {param}")
+    }
+}
+
+/// A number as a person writes it: `0`, `-1`, `0.005`, `1e12`, `1e300` (not 301 digits).
+pub(crate) fn num(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || !v.is_finite() || (1e-4..1e6).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
 }
 
 fn path_suffix(path: &Option<PathBuf>) -> String {

@@ -22,7 +22,7 @@ use nalgebra::DMatrix;
 
 use crate::compiled::CompiledModel;
 use crate::error::{BondError, Result};
-use crate::ode::{OdeError, OdeStats};
+use crate::ode::OdeStats;
 use crate::simulate::{Drive, Hold};
 
 /// `ẋ = A x + B u + c`, `y = C x + D u + e`, read off the tape with unit
@@ -121,6 +121,34 @@ struct Step {
     gamma1: Vec<f64>,
 }
 
+/// Above this 1-norm, the matrix exponential is taken of a copy scaled down
+/// by a power of two and squared back here. nalgebra's own scaling reads
+/// `‖M⁶‖`, `‖M⁸‖`, `‖M¹⁰‖`: past a norm of about 1e30 they overflow, its
+/// squaring count becomes `inf as u64` and the call never returns (issue
+/// 11: `--set k=1e60`). Below it, nalgebra's path is kept bit for bit.
+const MAX_EXP_NORM: f64 = 1e20;
+
+/// `e^M`, also for a matrix of huge or non-finite norm (NaN then, which the
+/// caller reports as a state that is not finite).
+fn expm(m: DMatrix<f64>) -> DMatrix<f64> {
+    let norm = (0..m.ncols())
+        .map(|j| m.column(j).iter().map(|v| v.abs()).sum::<f64>())
+        .fold(0.0, f64::max);
+    if !norm.is_finite() {
+        return DMatrix::from_element(m.nrows(), m.ncols(), f64::NAN);
+    }
+    if norm <= MAX_EXP_NORM {
+        return m.exp();
+    }
+    // At most ~1030 squarings for a finite norm.
+    let s = (norm / MAX_EXP_NORM).log2().ceil() as i32;
+    let mut e = (m * 2.0_f64.powi(-s)).exp();
+    for _ in 0..s {
+        e = &e * &e;
+    }
+    e
+}
+
 /// Van Loan: `exp([[A h, I h, 0], [0, 0, I], [0, 0, 0]])` holds `Φ`, `Γ0`
 /// (times the forcing `w`) and `Γ1` (times its change over the interval).
 fn discretise(a: &DMatrix<f64>, h: f64) -> Step {
@@ -131,7 +159,7 @@ fn discretise(a: &DMatrix<f64>, h: f64) -> Step {
         big[(i, n + i)] = h;
         big[(n + i, 2 * n + i)] = 1.0;
     }
-    let e = big.exp();
+    let e = expm(big);
     let rows = |c0: usize| -> Vec<f64> {
         let mut v = Vec::with_capacity(n * n);
         for i in 0..n {
@@ -216,8 +244,8 @@ pub fn piecewise_constant(drives: &[Drive]) -> bool {
 ///
 /// # Errors
 /// [`BondError::BadOptions`] if the model is not state-affine, or is not LTI
-/// and a drive is not piecewise constant; [`BondError::Ode`] for a state
-/// that stops being finite (an unstable model run far).
+/// and a drive is not piecewise constant; [`BondError::NonFiniteState`] for a
+/// state that stops being finite (an unstable model run far).
 pub fn integrate(
     model: &CompiledModel,
     drives: &[Drive],
@@ -436,10 +464,7 @@ pub fn integrate(
     }
     for (i, column) in columns.iter().enumerate() {
         if let Some(k) = column.iter().position(|v| !v.is_finite()) {
-            return Err(BondError::Ode(OdeError::NonFinite {
-                t: t_out[k],
-                component: i,
-            }));
+            return Err(model.non_finite_state(i, t_out[k]));
         }
     }
     Ok((

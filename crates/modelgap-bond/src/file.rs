@@ -181,7 +181,10 @@ impl Ctx<'_> {
 /// # Errors
 /// [`BondError::File`] with the line and column of the problem: TOML
 /// syntax, unknown fields, unknown element kinds, laws that do not parse,
-/// bonds to unknown elements, wrong bond counts, unknown names in laws.
+/// bonds to unknown elements, wrong bond counts, unknown names in laws,
+/// coefficients an element cannot physically have (a zero inductance, a
+/// negative resistance: the line of the parameter's value) or that are not
+/// finite (`1/0`).
 pub fn read_model(src: &str) -> Result<BondGraph> {
     let file: ModelFile = toml::from_str(src).map_err(|e| {
         let (line, column) = e.span().map_or((1, 1), |s| line_col(src, s.start));
@@ -350,9 +353,19 @@ pub fn read_model(src: &str) -> Result<BondGraph> {
     // Structural checks, located at the element they concern.
     if let Err(err) = g.validate() {
         let span = match &err {
+            // A value out of range is fixed where the value is written.
+            BondError::UnphysicalParameter {
+                param,
+                expression: false,
+                ..
+            } if file.parameters.contains_key(param) => {
+                file.parameters.get(param).map(Spanned::span)
+            }
             BondError::BadPorts { element, .. }
             | BondError::BadLaw { element, .. }
-            | BondError::UnknownName { element, .. } => g
+            | BondError::UnknownName { element, .. }
+            | BondError::UnphysicalParameter { element, .. }
+            | BondError::LawNotFinite { element, .. } => g
                 .find(element)
                 .and_then(|id| element_spans.get(id.0 as usize).cloned()),
             BondError::BadOutput { output, .. } => file
@@ -375,9 +388,9 @@ pub fn read_model(src: &str) -> Result<BondGraph> {
 /// # Errors
 /// As [`read_model`], with the path added; [`BondError::Io`] if it cannot be read.
 pub fn read_model_path(path: &Path) -> Result<BondGraph> {
-    let src = std::fs::read_to_string(path).map_err(|source| BondError::Io {
+    let src = std::fs::read_to_string(path).map_err(|error| BondError::Io {
         message: format!("cannot read model file {}", path.display()),
-        source,
+        error,
     })?;
     read_model(&src).map_err(|e| match e {
         BondError::File {

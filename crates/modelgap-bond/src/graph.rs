@@ -14,6 +14,8 @@
 use std::collections::BTreeMap;
 use std::fmt;
 
+use modelgap_core::recording::MAX_MAGNITUDE;
+
 use crate::element::{Element, ElementKind, InputSignal, Law, Output, Parameter};
 use crate::error::{BondError, Result};
 use crate::expr::Expr;
@@ -40,6 +42,28 @@ impl BondId {
 
     fn index(self) -> usize {
         self.0 as usize
+    }
+}
+
+/// True for a finite value within [`MAX_MAGNITUDE`] (what a parameter or input default may be).
+fn in_range(value: f64) -> bool {
+    value.is_finite() && value.abs() <= MAX_MAGNITUDE
+}
+
+/// What the linear coefficient of an R, C or I element is (`inductance` for
+/// an I whose parameter is in H, `inertia` in kg m², `mass` in kg).
+fn coefficient_quantity(kind: ElementKind, unit: &str) -> &'static str {
+    use crate::effects::Domain;
+    match kind {
+        ElementKind::R => "resistance",
+        ElementKind::C => "capacitance",
+        ElementKind::I => match Domain::of_unit(unit) {
+            Some(Domain::Electrical) => "inductance",
+            Some(Domain::Rotational) => "inertia",
+            Some(Domain::Translational) => "mass",
+            None => "inertance",
+        },
+        _ => "coefficient",
     }
 }
 
@@ -156,8 +180,8 @@ impl BondGraph {
     /// Declares or replaces a parameter.
     ///
     /// # Errors
-    /// [`BondError::BadParameter`] for a non-finite value, [`BondError::NameClash`]
-    /// if an input has the same name.
+    /// [`BondError::BadParameter`] for a value that is not finite or beyond
+    /// [`MAX_MAGNITUDE`], [`BondError::NameClash`] if an input has the same name.
     pub fn add_param(
         &mut self,
         name: &str,
@@ -165,7 +189,7 @@ impl BondGraph {
         unit: &str,
         description: &str,
     ) -> Result<()> {
-        if !value.is_finite() {
+        if !in_range(value) {
             return Err(BondError::BadParameter {
                 name: name.to_string(),
                 value,
@@ -191,8 +215,8 @@ impl BondGraph {
     /// Declares or replaces an input signal with its default value.
     ///
     /// # Errors
-    /// [`BondError::BadParameter`] for a non-finite default, [`BondError::NameClash`]
-    /// if a parameter has the same name.
+    /// [`BondError::BadParameter`] for a default that is not finite or beyond
+    /// [`MAX_MAGNITUDE`], [`BondError::NameClash`] if a parameter has the same name.
     pub fn add_input(
         &mut self,
         name: &str,
@@ -200,7 +224,7 @@ impl BondGraph {
         unit: &str,
         description: &str,
     ) -> Result<()> {
-        if !default.is_finite() {
+        if !in_range(default) {
             return Err(BondError::BadParameter {
                 name: name.to_string(),
                 value: default,
@@ -240,18 +264,38 @@ impl BondGraph {
 
     /// Sets an existing parameter's value (`--set R=1.2`).
     ///
+    /// The coefficients of the linear R, C and I elements that use the
+    /// parameter are checked at once (see [`BondGraph::check_coefficients`]);
+    /// on error the graph is left unchanged.
+    ///
     /// # Errors
-    /// [`BondError::UnknownParameter`] listing the known names, or
-    /// [`BondError::BadParameter`] for a non-finite value.
+    /// [`BondError::UnknownParameter`] listing the known names,
+    /// [`BondError::BadParameter`] for a value that is not finite or beyond
+    /// [`MAX_MAGNITUDE`], [`BondError::UnphysicalParameter`] for a value its element cannot have
+    /// (`L = 0`, `R = -1`), [`BondError::LawNotFinite`] for a coefficient that
+    /// the value makes infinite (`1/R` at `R = 0`).
     pub fn set_param(&mut self, name: &str, value: f64) -> Result<()> {
-        if !value.is_finite() {
+        if !in_range(value) {
             return Err(BondError::BadParameter {
                 name: name.to_string(),
                 value,
             });
         }
         if let Some(p) = self.params.get_mut(name) {
-            p.value = value;
+            let old = std::mem::replace(&mut p.value, value);
+            let users: Vec<ElementId> = self
+                .element_ids()
+                .filter(|&id| match &self.element(id).law {
+                    Law::Linear(e) => e.params().contains(name),
+                    _ => false,
+                })
+                .collect();
+            if let Some(err) = users.into_iter().find_map(|id| self.coefficient_error(id)) {
+                if let Some(p) = self.params.get_mut(name) {
+                    p.value = old;
+                }
+                return Err(err);
+            }
             return Ok(());
         }
         if let Some(i) = self.inputs.get_mut(name) {
@@ -385,9 +429,99 @@ impl BondGraph {
         })
     }
 
+    /// Checks that every linear coefficient that depends on parameters only
+    /// is physically possible: an I's inductance, inertia or mass and a C's
+    /// capacitance are positive, an R's resistance is zero or positive, and
+    /// every such coefficient (also a TF or GY modulus) is finite.
+    /// Coefficients that follow an input or time are checked where a
+    /// simulation starts instead (see [`crate::simulate::simulate`]).
+    ///
+    /// [`BondGraph::validate`] (so loading a model file, assigning causality
+    /// and compiling) and [`BondGraph::set_param`] run this check.
+    ///
+    /// # Errors
+    /// [`BondError::UnphysicalParameter`] naming the parameter, the element
+    /// and its kind, the value and what is expected;
+    /// [`BondError::LawNotFinite`] for a coefficient such as `1/0`.
+    pub fn check_coefficients(&self) -> Result<()> {
+        match self.element_ids().find_map(|id| self.coefficient_error(id)) {
+            Some(err) => Err(err),
+            None => Ok(()),
+        }
+    }
+
+    /// The problem with an element's linear coefficient, if it has one.
+    fn coefficient_error(&self, id: ElementId) -> Option<BondError> {
+        let el = self.element(id);
+        let Law::Linear(e) = &el.law else {
+            return None;
+        };
+        let constant = matches!(
+            el.kind,
+            ElementKind::R | ElementKind::C | ElementKind::I | ElementKind::Tf | ElementKind::Gy
+        );
+        if !constant {
+            return None;
+        }
+        // Parameters only: a coefficient that follows an input or time has no value here.
+        let value = e.eval(&|leaf: &Expr| match leaf {
+            Expr::Param(n) => self.params.get(n).map(|p| p.value),
+            _ => None,
+        })?;
+        if !value.is_finite() {
+            return Some(BondError::LawNotFinite {
+                element: el.name.clone(),
+                field: if el.kind.is_two_port() {
+                    "modulus"
+                } else {
+                    "parameter"
+                }
+                .to_string(),
+                law: e.to_string(),
+                value,
+                point: "whatever the state (it is a constant)".to_string(),
+            });
+        }
+        let (ok, expected) = match el.kind {
+            ElementKind::R => (value >= 0.0, "zero or positive"),
+            ElementKind::C | ElementKind::I => (value > 0.0, "positive"),
+            _ => return None,
+        };
+        if ok {
+            return None;
+        }
+        let (param, expression) = match e {
+            Expr::Param(name) => (name.clone(), false),
+            _ => (e.to_string(), true),
+        };
+        let unit = e
+            .params()
+            .iter()
+            .filter_map(|n| self.params.get(n))
+            .map(|p| p.unit.trim())
+            .find(|u| !u.is_empty())
+            .unwrap_or("")
+            .to_string();
+        let quantity = coefficient_quantity(el.kind, &unit);
+        Some(BondError::UnphysicalParameter {
+            param,
+            expression,
+            element: el.name.clone(),
+            kind: el.kind,
+            quantity: if unit.is_empty() {
+                quantity.to_string()
+            } else {
+                format!("{quantity}, {unit}")
+            },
+            expected,
+            value,
+        })
+    }
+
     /// Checks the structure: bond counts and directions per element kind,
     /// laws present where needed, names in laws declared, outputs pointing
-    /// at something that has the variable.
+    /// at something that has the variable; then the coefficients
+    /// ([`BondGraph::check_coefficients`]).
     ///
     /// # Errors
     /// The first problem found, naming the element, bond or output.
@@ -432,7 +566,7 @@ impl BondGraph {
                 });
             }
         }
-        Ok(())
+        self.check_coefficients()
     }
 
     fn validate_element(&self, id: ElementId) -> Result<()> {

@@ -149,8 +149,9 @@ impl BondModel {
     ///
     /// # Errors
     /// As [`BondModel::edited`]; causality, equation and solver errors of the
-    /// edited graph; [`BondError::BadOptions`] when [`Start::SteadyState`]
-    /// finds no steady state.
+    /// edited graph (see [`simulate`]); [`BondError::LawNotFinite`] for a law
+    /// that is NaN where the steady start's search begins;
+    /// [`BondError::BadOptions`] when [`Start::SteadyState`] finds no steady state.
     pub fn run(&self, rec: &Recording, effects: &[(&Candidate, &[f64])]) -> Result<Run> {
         let (graph, changes): (Cow<'_, BondGraph>, Vec<ParamChange>) = if effects.is_empty() {
             (Cow::Borrowed(&self.graph), self.changes.clone())
@@ -268,6 +269,8 @@ fn steady_start(
         }
     }
     let u0 = first_inputs(model, rec);
+    // A law that is NaN where Newton starts is named, not reported as "no convergence".
+    model.check_finite(0.0, &guess, &u0, true)?;
     newton(model, &u0, &guess, &held_states(graph, model))
         .map_err(|e| BondError::BadOptions(format!("no steady state to start from: {e}")))
 }

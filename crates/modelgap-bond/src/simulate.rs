@@ -172,6 +172,18 @@ impl Drive {
         }
     }
 
+    /// How many switching edges [`Drive::breakpoints`] would list in
+    /// `(t0, t1]`, counted without listing them (an upper bound, as `f64`
+    /// so that a PWM at 1 THz over an hour does not overflow).
+    fn n_edges(&self, t0: f64, t1: f64) -> f64 {
+        match self {
+            Drive::Pwm {
+                frequency_hz, duty, ..
+            } if *duty > 0.0 && *duty < 1.0 => 2.0 * frequency_hz * (t1 - t0).max(0.0) + 2.0,
+            _ => 0.0,
+        }
+    }
+
     /// Times in `(t0, t1]` where the drive jumps.
     pub(crate) fn breakpoints(&self, t0: f64, t1: f64, out: &mut Vec<f64>) {
         match self {
@@ -255,7 +267,20 @@ pub struct SimOptions {
     pub initial_state: Option<Vec<f64>>,
     /// Parameter changes during the run (faults), applied in time order.
     pub changes: Vec<ParamChange>,
+    /// The most discontinuities a run may have: PWM switching edges (two
+    /// per period) plus parameter changes. Each is a point the integrator
+    /// stops at and a value held in memory, so it is checked before the run
+    /// starts ([`BondError::TooLarge`]). Default [`DEFAULT_MAX_EVENTS`].
+    pub max_events: usize,
 }
+
+/// The default of [`SimOptions::max_events`]: ten million discontinuities
+/// (a 20 kHz PWM for 250 s; 80 MB of edge times).
+pub const DEFAULT_MAX_EVENTS: usize = 10_000_000;
+
+/// The default limit of [`checked_time_grid`]: ten million output samples
+/// (the DC motor's six columns, time included, take about 500 MB).
+pub const DEFAULT_MAX_SAMPLES: usize = 10_000_000;
 
 impl Default for SimOptions {
     fn default() -> SimOptions {
@@ -266,6 +291,7 @@ impl Default for SimOptions {
             max_step: f64::INFINITY,
             initial_state: None,
             changes: Vec::new(),
+            max_events: DEFAULT_MAX_EVENTS,
         }
     }
 }
@@ -393,18 +419,116 @@ impl Run {
 }
 
 /// Evenly spaced output times from 0 to `duration` at `rate_hz`, inclusive.
+///
+/// Allocates `duration × rate_hz + 1` times whatever they are; with values
+/// from a user, use [`checked_time_grid`].
 pub fn time_grid(duration: f64, rate_hz: f64) -> Vec<f64> {
     let n = (duration * rate_hz).round() as usize;
     (0..=n).map(|k| k as f64 / rate_hz).collect()
 }
 
+/// [`time_grid`] after checking its arguments: both finite and positive,
+/// and at most `max_samples` times (see [`DEFAULT_MAX_SAMPLES`]).
+///
+/// # Errors
+/// [`BondError::BadOptions`] for a duration or rate that is not a positive
+/// number; [`BondError::TooLarge`] (option `max_samples`) for more samples
+/// than the limit, before anything is allocated.
+///
+/// # Example
+/// ```
+/// # use modelgap_bond::simulate::{checked_time_grid, DEFAULT_MAX_SAMPLES};
+/// assert_eq!(checked_time_grid(1.0, 1000.0, DEFAULT_MAX_SAMPLES).unwrap().len(), 1001);
+/// assert!(checked_time_grid(1.0, 1e12, DEFAULT_MAX_SAMPLES).is_err());
+/// ```
+pub fn checked_time_grid(duration: f64, rate_hz: f64, max_samples: usize) -> Result<Vec<f64>> {
+    if !(duration.is_finite() && duration > 0.0) {
+        return Err(BondError::BadOptions(format!(
+            "the duration must be a positive number of seconds, found {duration}"
+        )));
+    }
+    if !(rate_hz.is_finite() && rate_hz > 0.0) {
+        return Err(BondError::BadOptions(format!(
+            "the sample rate must be a positive number of Hz, found {rate_hz}"
+        )));
+    }
+    let count = (duration * rate_hz).round() + 1.0;
+    // Finite or +inf (a product past f64::MAX), never NaN: both arguments are positive.
+    if count > max_samples as f64 {
+        return Err(BondError::TooLarge {
+            what: format!(
+                "the output samples of {} s at {} Hz",
+                crate::error::num(duration),
+                crate::error::num(rate_hz)
+            ),
+            count,
+            limit: max_samples,
+            option: "max_samples",
+        });
+    }
+    Ok(time_grid(duration, rate_hz))
+}
+
+/// Checks that the drives and parameter changes of a run over `[t0, t1]`
+/// make at most `max_events` discontinuities, before any is listed.
+fn check_events<'a>(
+    drives: impl IntoIterator<Item = (&'a str, &'a Drive)>,
+    n_changes: usize,
+    t0: f64,
+    t1: f64,
+    max_events: usize,
+) -> Result<()> {
+    let mut total = n_changes as f64;
+    let mut largest: Option<(&str, &Drive, f64)> = None;
+    for (name, d) in drives {
+        let n = d.n_edges(t0, t1);
+        total += n;
+        if largest.is_none_or(|(_, _, m)| n > m) {
+            largest = Some((name, d, n));
+        }
+    }
+    if total <= max_events as f64 {
+        return Ok(());
+    }
+    let what = match largest {
+        Some((name, Drive::Pwm { frequency_hz, .. }, n)) if n > 0.0 => format!(
+            "the switching edges of the PWM on input {name} ({} Hz over {} s){}",
+            crate::error::num(*frequency_hz),
+            crate::error::num(t1 - t0),
+            if total > n {
+                " with the run's other discontinuities"
+            } else {
+                ""
+            }
+        ),
+        _ => "the discontinuities of the run (parameter changes)".to_string(),
+    };
+    Err(BondError::TooLarge {
+        what,
+        count: total,
+        limit: max_events,
+        option: "max_events",
+    })
+}
+
 /// Simulates a bond graph: compiles it (applying parameter changes at
 /// their times) and integrates from t = 0 to the last output time.
+///
+/// Before integrating, the run is checked: the parameter changes must give
+/// values the elements can have, the PWM edges and changes must stay within
+/// [`SimOptions::max_events`], and every law must be finite at the start
+/// (the initial state under the inputs' first values).
 ///
 /// # Errors
 /// Causality and equation errors of the graph; [`BondError::BadInput`] for a
 /// drive of an unknown input or a malformed drive; [`BondError::BadOptions`]
-/// for unsorted or non-finite times; [`BondError::Ode`] if the solver fails.
+/// for unsorted or non-finite times; the errors of
+/// [`BondGraph::set_param`] for a change to a value its element cannot have;
+/// [`BondError::TooLarge`] for too many discontinuities;
+/// [`BondError::LawNotFinite`] for a law that is NaN or infinite at the
+/// start; [`BondError::NonFiniteState`] when a state stops being finite
+/// (naming it: `p3`, the momentum of I:L) and [`BondError::NonFiniteOutput`]
+/// for an output; [`BondError::Ode`] if the solver fails otherwise.
 ///
 /// # Example
 /// ```
@@ -418,6 +542,19 @@ pub fn simulate(g: &BondGraph, inputs: &Inputs, t_out: &[f64], opts: &SimOptions
     let model = CompiledModel::new(g)?;
     if opts.changes.is_empty() {
         return simulate_compiled(&model, inputs, t_out, opts);
+    }
+    // Every change is checked before the first segment runs.
+    for c in &opts.changes {
+        g.clone().set_param(&c.name, c.value)?;
+    }
+    if let (Some(&first), Some(&last)) = (t_out.first(), t_out.last()) {
+        check_events(
+            inputs.drives.iter().map(|(n, d)| (n.as_str(), d)),
+            opts.changes.len(),
+            first,
+            last,
+            opts.max_events,
+        )?;
     }
     // Piecewise: one compiled model per interval between changes.
     let mut changes = opts.changes.clone();
@@ -587,6 +724,16 @@ fn simulate_from(
         None => vec![0.0; n],
     };
     let t_end = *t_out.last().unwrap_or(&t0);
+    check_events(
+        model.input_names.iter().map(String::as_str).zip(&drives),
+        0,
+        t0,
+        t_end,
+        opts.max_events,
+    )?;
+    // Every law finite where the run starts, or an error naming the law.
+    let u0: Vec<f64> = drives.iter().map(|d| d.value(t0, &mut 0)).collect();
+    model.check_finite(t0, &x0, &u0, true)?;
     let exact_ok =
         model.is_lti || model.is_state_affine && crate::exact::piecewise_constant(&drives);
     let exact = match opts.solver {
@@ -622,7 +769,11 @@ fn simulate_from(
         };
         let mut sys = System::new(model, &drives);
         let mut rows = vec![0.0; t_out.len() * n];
-        let stats = ode::solve(&mut sys, method, t0, &x0, t_out, &bps, &ode_opts, &mut rows)?;
+        let stats = ode::solve(&mut sys, method, t0, &x0, t_out, &bps, &ode_opts, &mut rows)
+            .map_err(|e| match e {
+                ode::OdeError::NonFinite { t, component } => model.non_finite_state(component, t),
+                other => BondError::Ode(other),
+            })?;
         let columns = (0..n)
             .map(|i| (0..t_out.len()).map(|k| rows[k * n + i]).collect())
             .collect();
@@ -689,10 +840,14 @@ fn simulate_from(
     };
     for (i, column) in outputs.iter().enumerate() {
         if let Some(k) = column.iter().position(|v| !v.is_finite()) {
-            return Err(BondError::Ode(ode::OdeError::NonFinite {
+            // Name the law that is not finite there, if one is.
+            let x: Vec<f64> = states.iter().map(|c| c[k]).collect();
+            let u: Vec<f64> = inputs.iter().map(|c| c[k]).collect();
+            model.check_finite(t_out[k], &x, &u, false)?;
+            return Err(BondError::NonFiniteOutput {
+                output: model.output_names[i].clone(),
                 t: t_out[k],
-                component: i,
-            }));
+            });
         }
     }
     let run = Run {

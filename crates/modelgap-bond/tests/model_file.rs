@@ -313,7 +313,9 @@ fn non_finite_parameter_names_the_parameter_and_line() {
         let (l, c) = position_of(&src, "Rbad = {");
         assert_eq!((line, column), (l, c + "Rbad = ".len()), "{msg}");
         assert!(
-            msg.contains(&format!("parameter 'Rbad' must be finite, found {shown}")),
+            msg.contains(&format!(
+                "parameter 'Rbad' must be finite and at most 1e100 in magnitude, found {shown}"
+            )),
             "{msg}"
         );
     }

@@ -191,14 +191,137 @@ pub enum ClothError {
         /// What was given.
         found: String,
     },
+    /// An OBJ face refers to a vertex that is not defined (yet): OBJ indices count from 1,
+    /// and negative ones count back from the last vertex defined so far (−1 is the last).
+    #[error(
+        "OBJ line {line}: expected a face vertex index {}, found {index}{}",
+        obj_range(*.n_vertices),
+        in_path(.path)
+    )]
+    ObjIndex {
+        /// 1-based line number of the face.
+        line: usize,
+        /// The index as written in the file.
+        index: i64,
+        /// Vertices defined before the face.
+        n_vertices: usize,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+    /// A field of a scene file is out of its range.
+    #[error("scene '{scene}': {field} must be {expected}, found {found}")]
+    SceneField {
+        /// The scene's name or file name.
+        scene: String,
+        /// The field, as written in the file (`gravity`, `cloth.pins[2]`, …).
+        field: String,
+        /// What it must be.
+        expected: String,
+        /// What was given.
+        found: String,
+    },
+    /// A scene pins the same vertex twice.
+    #[error(
+        "scene '{scene}': vertex {vertex} is pinned twice, by {first} and by {second}; \
+         expected each vertex pinned once"
+    )]
+    DuplicatePin {
+        /// The scene's name or file name.
+        scene: String,
+        /// The vertex (index `row * nx + col`).
+        vertex: u32,
+        /// Where it is pinned first (`cloth.pins[0]`, `pins.paths[1].vertex`).
+        first: String,
+        /// Where it is pinned again.
+        second: String,
+    },
+    /// A grid has more particles than its limit allows (checked before anything is
+    /// allocated; see the field `max_particles` of [`GridCloth`](crate::GridCloth)).
+    #[error(
+        "expected at most {limit} particles (`max_particles`), found a {nx} x {nz} grid of {} \
+         particles",
+        u128::from(*.nx as u64) * u128::from(*.nz as u64)
+    )]
+    TooManyParticles {
+        /// Vertices along x.
+        nx: usize,
+        /// Vertices along z.
+        nz: usize,
+        /// The limit (particles).
+        limit: usize,
+    },
+    /// A run needs more steps than its limit allows (checked before the run starts; see
+    /// [`RunLimits::max_steps`](crate::trajectory::RunLimits::max_steps)).
+    #[error(
+        "expected at most {limit} steps (`max_steps`), found {} (duration {} s / dt {} s)",
+        num(*.steps),
+        num(*.duration),
+        num(*.dt)
+    )]
+    TooManySteps {
+        /// The steps the run needs: `duration / dt`, rounded.
+        steps: f64,
+        /// Simulated time (s).
+        duration: f64,
+        /// Step size (s).
+        dt: f64,
+        /// The limit (steps).
+        limit: usize,
+    },
+    /// A run would record more frames than its memory limit allows (checked before the run
+    /// starts; see [`RunLimits::max_frame_bytes`](crate::trajectory::RunLimits::max_frame_bytes)).
+    #[error(
+        "expected recorded frames within {limit} bytes (`max_frame_bytes`), found {frames} \
+         frames x {positions} positions x 24 bytes = {bytes} bytes ({:.1} GiB); record fewer \
+         frames (a lower rate) or fewer markers",
+        *.bytes as f64 / f64::from(1u32 << 30)
+    )]
+    TooMuchFrameMemory {
+        /// Frames the run would record.
+        frames: u64,
+        /// Positions per frame (every vertex, plus the markers).
+        positions: u64,
+        /// `frames × positions × 24` bytes.
+        bytes: u128,
+        /// The limit (bytes).
+        limit: u64,
+    },
+    /// A step left a non-finite (NaN or infinite, or overflowed) position, velocity or
+    /// stretch: the simulation diverged. The world holds that step's state.
+    #[error(
+        "simulation diverged at step {step} (t = {} s): expected a finite {quantity}{}, \
+         found {value}",
+        num(*.time),
+        .particle.map(|p| format!(" of particle {p}")).unwrap_or_default()
+    )]
+    Diverged {
+        /// The step (counted from 1 over the world's life).
+        step: usize,
+        /// Simulated time at the end of the step (s).
+        time: f64,
+        /// `position`, `velocity` or `stretch`.
+        quantity: &'static str,
+        /// The particle (index in the world) of a position or velocity.
+        particle: Option<u32>,
+        /// The value found: a vector `[x, y, z]`, or a stretch and its edge (`inf on edge 4-7`).
+        value: String,
+    },
+    /// A run was cancelled through its cancel flag (Ctrl-C) between two steps.
+    #[error("run cancelled after step {step} of {steps}")]
+    Cancelled {
+        /// Steps done.
+        step: usize,
+        /// Steps the run would have taken.
+        steps: usize,
+    },
     /// An error of modelgap-core: MCAP files, their topics, their time.
     #[error(transparent)]
     Core(#[from] CoreError),
 }
 
 impl ClothError {
-    /// The same error with `path` as the file it is about (for marker errors and core
-    /// errors; other variants are returned unchanged).
+    /// The same error with `path` as the file it is about (for marker errors, OBJ face
+    /// indices and core errors; other variants are returned unchanged).
     #[must_use]
     pub fn with_path(self, file: &Path) -> Self {
         let set = |path: Option<PathBuf>| path.or_else(|| Some(file.to_path_buf()));
@@ -232,6 +355,17 @@ impl ClothError {
                 path: set(path),
             },
             Self::NoMarkerFrames { path } => Self::NoMarkerFrames { path: set(path) },
+            Self::ObjIndex {
+                line,
+                index,
+                n_vertices,
+                path,
+            } => Self::ObjIndex {
+                line,
+                index,
+                n_vertices,
+                path: set(path),
+            },
             Self::Core(e) => Self::Core(e.with_path(file)),
             other => other,
         }
@@ -243,6 +377,26 @@ fn in_path(path: &Option<PathBuf>) -> String {
     path.as_ref()
         .map(|p| format!(" in {}", p.display()))
         .unwrap_or_default()
+}
+
+/// A number for a message: plain when it reads well, in exponent form when very large or
+/// small (`1e200`, not two hundred zeros).
+pub(crate) fn num(v: f64) -> String {
+    let a = v.abs();
+    if a != 0.0 && a.is_finite() && !(1e-4..1e7).contains(&a) {
+        format!("{v:e}")
+    } else {
+        v.to_string()
+    }
+}
+
+/// The valid face indices of an OBJ file with `n` vertices defined so far.
+fn obj_range(n: usize) -> String {
+    if n == 0 {
+        "of a vertex defined before the face (none is)".to_owned()
+    } else {
+        format!("from 1 to {n} or from -{n} to -1 ({n} vertices defined so far)")
+    }
 }
 
 /// `Result` with [`ClothError`] as the error type.

@@ -233,6 +233,12 @@ struct CsvFrame {
 /// one; [`ClothError::NoMarkerFrames`] when there are no rows; [`ClothError::Core`] when the
 /// text cannot be read or is not UTF-8.
 pub fn read_markers_csv(reader: impl Read) -> Result<MarkerRecording> {
+    read_csv(reader, None)
+}
+
+/// Reads marker CSV text; with `n_vertices`, an id of no vertex (`id >= n_vertices`) is
+/// refused at its line.
+fn read_csv(reader: impl Read, n_vertices: Option<usize>) -> Result<MarkerRecording> {
     let mut reader = BufReader::new(reader);
     let mut buf = Vec::new();
     let mut line_no = 0usize;
@@ -273,6 +279,7 @@ pub fn read_markers_csv(reader: impl Read) -> Result<MarkerRecording> {
             continue;
         }
         let (t, id, p) = parse_row(line, line_no)?;
+        check_vertex(id, n_vertices, Location::Line(line_no), "id")?;
         match current.as_mut() {
             Some(frame) if t.to_bits() == frame.t.to_bits() => frame.rows.push((id, p, line_no)),
             Some(frame) if t < frame.t => {
@@ -313,8 +320,29 @@ pub fn read_markers_csv(reader: impl Read) -> Result<MarkerRecording> {
 ///
 /// As [`read_markers_csv`], plus [`ClothError::Core`] when the file cannot be opened.
 pub fn read_markers_csv_path(path: &Path) -> Result<MarkerRecording> {
+    read_csv_path(path, None)
+}
+
+fn read_csv_path(path: &Path, n_vertices: Option<usize>) -> Result<MarkerRecording> {
     let file = File::open(path).map_err(|e| CoreError::io(e, Some(path)))?;
-    read_markers_csv(file).map_err(|e| e.with_path(path))
+    read_csv(file, n_vertices).map_err(|e| e.with_path(path))
+}
+
+/// [`ClothError::MarkerField`] at `at` when `id` is no vertex of a mesh of `n_vertices`.
+fn check_vertex(id: u32, n_vertices: Option<usize>, at: Location, field: &str) -> Result<()> {
+    match n_vertices {
+        Some(n) if id as usize >= n => Err(field_error(
+            at,
+            field,
+            &if n == 0 {
+                "a vertex of the mesh (it has none)".to_owned()
+            } else {
+                format!("a vertex of the mesh (0 to {})", n - 1)
+            },
+            &format!("marker id {id}"),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// Writes a marker recording as CSV text: the header `t,id,x,y,z`, then one row per marker
@@ -578,10 +606,18 @@ pub fn write_markers_mcap_path(recording: &MarkerRecording, path: &Path) -> Resu
 /// message that is not `{"ids": [..], "positions": [..]}` with whole-number ids and three
 /// finite numbers per id, or whose ids differ from the first frame's.
 pub fn read_markers_mcap(bytes: &[u8]) -> Result<MarkerRecording> {
+    read_mcap(bytes, None)
+}
+
+/// Reads marker MCAP data; with `n_vertices`, an id of no vertex is refused at its message.
+fn read_mcap(bytes: &[u8], n_vertices: Option<usize>) -> Result<MarkerRecording> {
     let messages = read_topic_messages(bytes, MARKERS_TOPIC)?;
     let mut frames = FrameSet::default();
     for message in &messages {
         let rows = parse_message(message)?;
+        for (k, &(id, _, at)) in rows.iter().enumerate() {
+            check_vertex(id, n_vertices, at, &format!("ids[{k}]"))?;
+        }
         frames.push(message.t, Location::Message(message.index), &rows)?;
     }
     frames.finish()
@@ -594,8 +630,12 @@ pub fn read_markers_mcap(bytes: &[u8]) -> Result<MarkerRecording> {
 ///
 /// As [`read_markers_mcap`], plus [`ClothError::Core`] when the file cannot be read.
 pub fn read_markers_mcap_path(path: &Path) -> Result<MarkerRecording> {
+    read_mcap_path(path, None)
+}
+
+fn read_mcap_path(path: &Path, n_vertices: Option<usize>) -> Result<MarkerRecording> {
     let bytes = std::fs::read(path).map_err(|e| CoreError::io(e, Some(path)))?;
-    read_markers_mcap(&bytes).map_err(|e| e.with_path(path))
+    read_mcap(&bytes, n_vertices).map_err(|e| e.with_path(path))
 }
 
 /// Reads a marker recording from a `.csv` or `.mcap` file, by extension.
@@ -608,6 +648,21 @@ pub fn read_markers_path(path: &Path) -> Result<MarkerRecording> {
     match modelgap_core::io::Format::from_path(path)? {
         modelgap_core::io::Format::Csv => read_markers_csv_path(path),
         modelgap_core::io::Format::Mcap => read_markers_mcap_path(path),
+    }
+}
+
+/// Reads a marker recording of a mesh of `n_vertices` vertices from a `.csv` or `.mcap`
+/// file: like [`read_markers_path`], and an id that is no vertex of the mesh is refused
+/// where it first appears (its CSV line or MCAP message), before the frames are compared.
+///
+/// # Errors
+///
+/// As [`read_markers_path`]; [`ClothError::MarkerField`] (field `id`, or `ids[k]` in MCAP)
+/// for an id of `n_vertices` or more, with the line or message and the file.
+pub fn read_markers_path_within(path: &Path, n_vertices: usize) -> Result<MarkerRecording> {
+    match modelgap_core::io::Format::from_path(path)? {
+        modelgap_core::io::Format::Csv => read_csv_path(path, Some(n_vertices)),
+        modelgap_core::io::Format::Mcap => read_mcap_path(path, Some(n_vertices)),
     }
 }
 
@@ -720,6 +775,30 @@ mod tests {
         assert_eq!(rec.ids(), &[3, 5]);
         assert_eq!(rec.positions()[1], vec![[0.0, 1.0, 2.0], [7.0, 8.0, 9.0]]);
         assert_eq!(rec.track(5).unwrap()[1], [7.0, 8.0, 9.0]);
+    }
+
+    /// Issue 11: an id past the mesh on line 7 was reported as another id on a later line.
+    #[test]
+    fn an_id_past_the_mesh_is_refused_at_its_own_line() {
+        let text = "t,id,x,y,z\n0,0,0,0,0\n0,1,1,0,0\n0,2,2,0,0\n0,3,3,0,0\n0,4000,4,0,0\n\
+                    0,5,5,0,0\n0.1,0,0,0,0\n0.1,1,1,0,0\n0.1,2,2,0,0\n0.1,3,3,0,0\n0.1,4,4,0,0\n";
+        let e = read_csv(text.as_bytes(), Some(9)).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "expected a vertex of the mesh (0 to 8) for `id` at line 6, found marker id 4000"
+        );
+        // Without a mesh the frames disagree, found later.
+        let e = read_csv(text.as_bytes(), None).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                ClothError::MarkerField {
+                    at: Location::Line(12),
+                    ..
+                }
+            ),
+            "{e}"
+        );
     }
 
     #[test]

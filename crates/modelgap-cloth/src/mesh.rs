@@ -14,6 +14,14 @@ use crate::error::{ClothError, Result};
 /// Mass of one particle by default (kg): 1 g, as in the reference scenes.
 pub const DEFAULT_PARTICLE_MASS: f64 = 1e-3;
 
+/// The largest grid built by default (the field `GridCloth::max_particles`): 1 000 000
+/// particles, a 1000 × 1000 grid, 11 times the largest grid the solver is measured on
+/// (300 × 300, 1.8 s per Newton step). Raise the limit to go further.
+pub const DEFAULT_MAX_PARTICLES: usize = 1_000_000;
+
+/// The most particles any cloth can have, whatever its limit says: vertex indices are `u32`.
+pub const MAX_VERTICES: usize = u32::MAX as usize;
+
 /// A cloth ready to be added to a world: a particle per vertex, a distance
 /// constraint per unique edge, and the pinned (static) vertices.
 #[derive(Clone, Debug, Default)]
@@ -48,12 +56,14 @@ impl BuildMesh for ClothMesh {
 impl ClothMesh {
     /// Reads an OBJ triangle (or polygon) mesh: `v x y z` lines become
     /// particles of `particle_mass` kg, each face's edges become unique
-    /// constraints (polygons are fanned into triangles). Other lines are ignored.
+    /// constraints (polygons are fanned into triangles). Face indices count from 1;
+    /// negative ones count back from the last vertex defined so far (`-1` is the last),
+    /// as OBJ allows. Other lines are ignored.
     ///
     /// # Errors
-    /// [`ClothError::Obj`] for a malformed line, [`ClothError::VertexOutOfRange`]
-    /// for a face index past the vertices, [`ClothError::EmptyMesh`] when there
-    /// are no faces.
+    /// [`ClothError::Obj`] for a malformed line, [`ClothError::ObjIndex`] (with the line
+    /// and the index as written) for a face index that names no vertex defined before
+    /// the face, [`ClothError::EmptyMesh`] when there are no faces.
     pub fn from_obj(reader: impl BufRead, particle_mass: f64) -> Result<Self> {
         check_positive("particle_mass", particle_mass)?;
         let mut positions = Vec::new();
@@ -94,12 +104,15 @@ impl ClothMesh {
                             line: line_no,
                             message: format!("expected a vertex index, found '{w}'"),
                         })?;
+                        // 1-based; negative counts back from the last vertex so far (-1).
                         let n = positions.len() as i64;
                         let zero_based = if idx < 0 { n + idx } else { idx - 1 };
                         if zero_based < 0 || zero_based >= n {
-                            return Err(ClothError::VertexOutOfRange {
-                                vertex: usize::try_from(idx.unsigned_abs()).unwrap_or(usize::MAX),
+                            return Err(ClothError::ObjIndex {
+                                line: line_no,
+                                index: idx,
                                 n_vertices: positions.len(),
+                                path: None,
                             });
                         }
                         face.push(zero_based as u32);
@@ -257,6 +270,10 @@ pub struct GridCloth {
     pub world_from_local: Isometry3<f64>,
     /// Pinned vertices (indices `row * nx + col`).
     pub pinned: Vec<u32>,
+    /// The most particles (`nx × nz`) [`build_mesh`](BuildMesh::build_mesh) accepts, checked
+    /// before anything is allocated; default [`DEFAULT_MAX_PARTICLES`] (1 000 000). Values
+    /// past [`MAX_VERTICES`] act as [`MAX_VERTICES`].
+    pub max_particles: usize,
 }
 
 impl GridCloth {
@@ -271,7 +288,24 @@ impl GridCloth {
             edges: GridEdges::default(),
             world_from_local: Isometry3::identity(),
             pinned: Vec::new(),
+            max_particles: DEFAULT_MAX_PARTICLES,
         }
+    }
+
+    /// Sets the most particles the grid may have (the field `max_particles`).
+    pub fn max_particles(mut self, n: usize) -> Self {
+        self.max_particles = n;
+        self
+    }
+
+    /// The number of vertices, `nx × nz`, checked: at least 2 × 2 and at most
+    /// `max_particles` (and [`MAX_VERTICES`]).
+    ///
+    /// # Errors
+    /// [`ClothError::BadGrid`] for fewer than 2 × 2 vertices,
+    /// [`ClothError::TooManyParticles`] past the limit.
+    pub fn n_vertices(&self) -> Result<usize> {
+        grid_size(self.nx, self.nz, self.max_particles)
     }
 
     /// The index of vertex (col, row): `row * nx + col`.
@@ -322,14 +356,14 @@ impl GridCloth {
 impl BuildMesh for GridCloth {
     /// # Errors
     /// [`ClothError::BadGrid`] for fewer than 2 × 2 vertices,
+    /// [`ClothError::TooManyParticles`] for more than
+    /// `max_particles` (checked before anything is allocated),
     /// [`ClothError::BadParameter`] for a non-positive spacing or mass,
     /// [`ClothError::VertexOutOfRange`] for a pin past the grid, and
     /// [`ClothError::StaticEdge`] for an edge between two pins.
     fn build_mesh(&self) -> Result<ClothMesh> {
         let (nx, nz) = (self.nx, self.nz);
-        if nx < 2 || nz < 2 {
-            return Err(ClothError::BadGrid { nx, nz });
-        }
+        self.n_vertices()?;
         check_positive("spacing", self.spacing)?;
         check_positive("particle_mass", self.particle_mass)?;
         let idx = |col: usize, row: usize| (row * nx + col) as u32;
@@ -382,6 +416,18 @@ impl BuildMesh for GridCloth {
         }
         mesh.check()?;
         Ok(mesh)
+    }
+}
+
+/// `nx × nz`, checked: at least 2 × 2, at most `max_particles` (and [`MAX_VERTICES`]).
+pub(crate) fn grid_size(nx: usize, nz: usize, max_particles: usize) -> Result<usize> {
+    if nx < 2 || nz < 2 {
+        return Err(ClothError::BadGrid { nx, nz });
+    }
+    let limit = max_particles.min(MAX_VERTICES);
+    match nx.checked_mul(nz) {
+        Some(n) if n <= limit => Ok(n),
+        _ => Err(ClothError::TooManyParticles { nx, nz, limit }),
     }
 }
 
@@ -477,6 +523,73 @@ mod tests {
         assert_eq!(mesh.triangles.len(), 2);
     }
 
+    /// Issue 11: OBJ's negative (relative) indices count back from the last vertex so far.
+    #[test]
+    fn obj_negative_indices_count_back_from_the_last_vertex() {
+        let relative = "v 0 0 0\nv 1 0 0\nv 1 0 1\nf -3 -2 -1\nv 0 0 1\nf -4 -2 -1\n";
+        let absolute = "v 0 0 0\nv 1 0 0\nv 1 0 1\nf 1 2 3\nv 0 0 1\nf 1 3 4\n";
+        let a = ClothMesh::from_obj(relative.as_bytes(), 0.01).unwrap();
+        let b = ClothMesh::from_obj(absolute.as_bytes(), 0.01).unwrap();
+        assert_eq!(a.triangles, b.triangles);
+        assert_eq!(a.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+    }
+
+    /// Issue 11: an index out of range names its line and the index as written (-9 was
+    /// reported as "vertex 9").
+    #[test]
+    fn obj_index_out_of_range_names_line_and_index_as_written() {
+        let text = "# square\nv 0 0 0\nv 1 0 0\nv 1 0 1\n\nf 1 2 -9\n";
+        let err = ClothMesh::from_obj(text.as_bytes(), 0.01).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "OBJ line 6: expected a face vertex index from 1 to 3 or from -3 to -1 (3 vertices \
+             defined so far), found -9"
+        );
+        let err = err.with_path(std::path::Path::new("cloth.obj"));
+        assert!(err.to_string().ends_with("found -9 in cloth.obj"), "{err}");
+        let err = ClothMesh::from_obj("f 0 1 2\n".as_bytes(), 0.01).unwrap_err();
+        assert!(
+            err.to_string()
+                .contains("of a vertex defined before the face (none is), found 0"),
+            "{err}"
+        );
+    }
+
+    /// Issue 11: a grid past its particle limit is refused before anything is allocated
+    /// (10¹⁰ particles aborted the process).
+    #[test]
+    fn grid_past_its_particle_limit_is_refused_before_allocating() {
+        let err = GridCloth::new(100_000, 100_000, 0.01)
+            .build_mesh()
+            .unwrap_err();
+        assert!(matches!(
+            err,
+            ClothError::TooManyParticles {
+                nx: 100_000,
+                nz: 100_000,
+                limit: DEFAULT_MAX_PARTICLES
+            }
+        ));
+        assert_eq!(
+            err.to_string(),
+            "expected at most 1000000 particles (`max_particles`), found a 100000 x 100000 \
+             grid of 10000000000 particles"
+        );
+        // Overflowing nx × nz is the same error, not a panic.
+        let err = GridCloth::new(usize::MAX, 3, 0.01)
+            .max_particles(usize::MAX)
+            .n_vertices()
+            .unwrap_err();
+        assert!(matches!(err, ClothError::TooManyParticles { limit, .. } if limit == MAX_VERTICES));
+        // The limit can be lowered and raised.
+        let small = GridCloth::new(4, 4, 0.1).max_particles(15);
+        assert!(matches!(
+            small.build_mesh(),
+            Err(ClothError::TooManyParticles { limit: 15, .. })
+        ));
+        assert_eq!(small.max_particles(16).n_vertices().unwrap(), 16);
+    }
+
     #[test]
     fn obj_errors_are_typed() {
         let err = ClothMesh::from_obj("v 0 0\n".as_bytes(), 0.01).unwrap_err();
@@ -484,7 +597,12 @@ mod tests {
         let err = ClothMesh::from_obj("v 0 0 0\nf 1 2 3\n".as_bytes(), 0.01).unwrap_err();
         assert!(matches!(
             err,
-            ClothError::VertexOutOfRange { vertex: 2, .. }
+            ClothError::ObjIndex {
+                line: 2,
+                index: 2,
+                n_vertices: 1,
+                ..
+            }
         ));
         let err = ClothMesh::from_obj("v 0 0 0\n".as_bytes(), 0.01).unwrap_err();
         assert!(matches!(

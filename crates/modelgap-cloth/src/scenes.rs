@@ -16,7 +16,7 @@
 //! duration = 3.0            # s
 //! dt = 0.01                 # s
 //! stretch_tolerance = 1e-4  # relative
-//! gravity = [0.0, -9.81, 0.0]
+//! gravity = [0.0, -9.81, 0.0]   # m/s^2, magnitude at most 1000 (solver::MAX_GRAVITY)
 //!
 //! [cloth]
 //! nx = 30
@@ -85,18 +85,19 @@
 //! path = [[0.0, 0.983, 0.0, 0.0], [1.0, 1.5, 0.0, 0.0]]  # [t (s), x, y, z (m)], linear
 //! ```
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use nalgebra::{Isometry3, Vector3};
 use serde::Deserialize;
 
 use crate::contact::{Collider, Shape};
-use crate::error::{ClothError, Result};
+use crate::error::{ClothError, Result, num};
 use crate::forces::{AIR_DENSITY, ClothEffects, ClothForces, PointMass};
 use crate::kinematic::{PinPath, follow_markers};
 use crate::markers::{MarkerRecording, read_markers_path};
 use crate::mesh::GridCloth;
-use crate::solver::SolverParams;
+use crate::solver::{MAX_GRAVITY, SolverParams};
 use crate::world::{ClothId, ClothWorld};
 
 const CORNER: &str = include_str!("../scenes/corner.toml");
@@ -274,7 +275,10 @@ fn read_obj_mesh(
         std::io::BufReader::new(file),
         crate::mesh::DEFAULT_PARTICLE_MASS,
     )
-    .map_err(|e| format!("{e} in {}", path.display()))
+    .map_err(|e| match e {
+        e @ ClothError::ObjIndex { .. } => e.with_path(&path).to_string(),
+        e => format!("{e} in {}", path.display()),
+    })
 }
 
 /// The scene file's colliders (an `obj` file relative to `dir` when given); an error
@@ -370,13 +374,118 @@ fn colliders_from_file(
     Ok(out)
 }
 
+/// The largest length or coordinate a scene file may hold (m): 1000 km. A grid far
+/// beyond it loses its spacing in the rounding of its positions.
+pub const MAX_SCENE_LENGTH: f64 = 1e6;
+
+/// A scene-file field out of its range, before the scene's label is attached.
+struct FieldError {
+    field: String,
+    expected: String,
+    found: String,
+}
+
+impl FieldError {
+    fn new(field: &str, expected: impl Into<String>, found: impl Into<String>) -> Self {
+        Self {
+            field: field.to_owned(),
+            expected: expected.into(),
+            found: found.into(),
+        }
+    }
+
+    fn in_scene(self, label: &str) -> ClothError {
+        ClothError::SceneField {
+            scene: label.to_owned(),
+            field: self.field,
+            expected: self.expected,
+            found: self.found,
+        }
+    }
+}
+
+/// `[x, y, z]` as written in a scene file.
+fn triple(v: [f64; 3]) -> String {
+    format!("[{}, {}, {}]", num(v[0]), num(v[1]), num(v[2]))
+}
+
+/// The numbers and sizes of a scene file, each checked where it enters.
+fn check_fields(file: &SceneFile) -> std::result::Result<(), FieldError> {
+    let positive = |field: &str, v: f64| {
+        if v > 0.0 && v.is_finite() {
+            Ok(())
+        } else {
+            Err(FieldError::new(field, "positive and finite", num(v)))
+        }
+    };
+    positive("dt", file.dt)?;
+    positive("duration", file.duration)?;
+    if let Some(tol) = file.stretch_tolerance {
+        positive("stretch_tolerance", tol)?;
+    }
+    if let Some(g) = file.gravity {
+        let magnitude = crate::solver::magnitude(&Vector3::from(g));
+        if magnitude.is_nan() || magnitude > MAX_GRAVITY {
+            return Err(FieldError::new(
+                "gravity",
+                format!("finite and at most {MAX_GRAVITY} m/s^2 in magnitude"),
+                format!("{} (magnitude {} m/s^2)", triple(g), num(magnitude)),
+            ));
+        }
+    }
+    let c = &file.cloth;
+    if c.nx < 2 || c.nz < 2 {
+        return Err(FieldError::new(
+            "cloth.nx x cloth.nz",
+            "at least 2 x 2 vertices",
+            format!("{} x {}", c.nx, c.nz),
+        ));
+    }
+    positive("cloth.size", c.size)?;
+    if c.size > MAX_SCENE_LENGTH {
+        return Err(FieldError::new(
+            "cloth.size",
+            format!("at most {MAX_SCENE_LENGTH} m"),
+            num(c.size),
+        ));
+    }
+    if let Some(m) = c.particle_mass {
+        positive("cloth.particle_mass", m)?;
+    }
+    if !c.origin.iter().all(|v| v.abs() <= MAX_SCENE_LENGTH) {
+        return Err(FieldError::new(
+            "cloth.origin",
+            format!("finite coordinates of at most {MAX_SCENE_LENGTH} m"),
+            triple(c.origin),
+        ));
+    }
+    if !c.rotation.iter().all(|v| v.is_finite()) {
+        return Err(FieldError::new(
+            "cloth.rotation",
+            "finite (rad, axis x angle)",
+            triple(c.rotation),
+        ));
+    }
+    Ok(())
+}
+
 impl Scene {
     /// Reads a scene from TOML text; `label` names it in errors.
     ///
+    /// Every field is checked where it enters, and an error names it (`gravity`,
+    /// `cloth.pins[2]`, `colliders[1]`): `dt`, `duration`, `cloth.size` and tolerances
+    /// positive and finite; lengths and coordinates (`cloth.size`, `cloth.origin`) at most
+    /// [`MAX_SCENE_LENGTH`] m; gravity finite and at most
+    /// [`MAX_GRAVITY`] m/s²; masses positive and finite; pins
+    /// on the grid, each vertex pinned once. The size of the grid is checked when it is
+    /// built (the field `max_particles` of [`GridCloth`]).
+    ///
     /// # Errors
-    /// [`ClothError::Scene`] for malformed TOML, unknown fields, or
-    /// non-positive `dt`, `duration`, `size` or tolerance, or a collider that cannot be
-    /// built (the message names it, `colliders[2]`, and its field).
+    /// [`ClothError::Scene`] for malformed TOML or unknown fields, or a collider that cannot
+    /// be built (the message names it, `colliders[2]`, and its field);
+    /// [`ClothError::SceneField`] for a field out of its range;
+    /// [`ClothError::DuplicatePin`] for a vertex pinned twice (in `cloth.pins` or
+    /// `pins.paths`).
     pub fn from_toml(text: &str, label: &str) -> Result<Self> {
         Self::from_toml_in(text, label, None)
     }
@@ -389,30 +498,10 @@ impl Scene {
             message,
         };
         let file: SceneFile = toml::from_str(text).map_err(|e| bad(e.to_string()))?;
-        for (what, v) in [
-            ("dt", file.dt),
-            ("duration", file.duration),
-            ("cloth.size", file.cloth.size),
-        ] {
-            if !(v > 0.0 && v.is_finite()) {
-                return Err(bad(format!(
-                    "{what} must be positive and finite, found {v}"
-                )));
-            }
-        }
-        if file.cloth.nx < 2 || file.cloth.nz < 2 {
-            return Err(bad(format!(
-                "a grid needs at least 2 x 2 vertices, found {} x {}",
-                file.cloth.nx, file.cloth.nz
-            )));
-        }
+        let in_scene = |e: FieldError| e.in_scene(label);
+        check_fields(&file).map_err(in_scene)?;
         let mut params = SolverParams::default();
         if let Some(tol) = file.stretch_tolerance {
-            if !(tol > 0.0 && tol.is_finite()) {
-                return Err(bad(format!(
-                    "stretch_tolerance must be positive, found {tol}"
-                )));
-            }
             params.stretch_tolerance = tol;
         }
         if let Some(g) = file.gravity {
@@ -430,24 +519,54 @@ impl Scene {
         if let Some(m) = c.particle_mass {
             cloth = cloth.particle_mass(m);
         }
-        for &p in &c.pins {
+        // Saturates for absurd sizes, which building the grid refuses with its limit.
+        let n_vertices = c.nx.saturating_mul(c.nz);
+        // Where each pinned vertex is pinned, to refuse a second pin.
+        let mut pinned_at: BTreeMap<u32, String> = BTreeMap::new();
+        let mut pin_once = |vertex: u32, at: String| match pinned_at.get(&vertex) {
+            Some(first) => Err(ClothError::DuplicatePin {
+                scene: label.to_string(),
+                vertex,
+                first: first.clone(),
+                second: at,
+            }),
+            None => {
+                pinned_at.insert(vertex, at);
+                Ok(())
+            }
+        };
+        for (k, &p) in c.pins.iter().enumerate() {
+            let field = format!("cloth.pins[{k}]");
+            if p as usize >= n_vertices {
+                return Err(in_scene(FieldError::new(
+                    &field,
+                    format!(
+                        "a vertex of the {} x {} grid (below {n_vertices})",
+                        c.nx, c.nz
+                    ),
+                    p.to_string(),
+                )));
+            }
+            pin_once(p, field)?;
             cloth = cloth.pin(p);
         }
-        let n_vertices = c.nx * c.nz;
         let mut pin_paths = Vec::with_capacity(file.pins.paths.len());
         for (k, p) in file.pins.paths.iter().enumerate() {
+            let field = format!("pins.paths[{k}].vertex");
             if p.vertex as usize >= n_vertices {
-                return Err(bad(format!(
-                    "pins.paths[{k}].vertex must be below {n_vertices} (the grid's vertices), found {}",
-                    p.vertex
+                return Err(in_scene(FieldError::new(
+                    &field,
+                    format!("below {n_vertices} (the grid's vertices)"),
+                    p.vertex.to_string(),
                 )));
             }
             let path = PinPath::from_rows(&p.path)
                 .map_err(|e| bad(format!("pins.paths[{k}] (vertex {}): {e}", p.vertex)))?;
+            pin_once(p.vertex, field)?;
             cloth = cloth.pin(p.vertex);
             pin_paths.push((p.vertex, path));
         }
-        let effects = effects_from_file(&file, n_vertices).map_err(bad)?;
+        let effects = effects_from_file(&file, n_vertices).map_err(in_scene)?;
         let colliders = colliders_from_file(&file.colliders, dir).map_err(bad)?;
         Ok(Self {
             name: file.name,
@@ -489,12 +608,11 @@ impl Scene {
     ///
     /// # Errors
     ///
-    /// [`ClothError::BadGrid`] for fewer than 2 × 2 vertices.
+    /// [`ClothError::BadGrid`] for fewer than 2 × 2 vertices,
+    /// [`ClothError::TooManyParticles`] for more than the cloth's `max_particles`.
     pub fn resized(&self, nx: usize, nz: usize) -> Result<Self> {
-        if nx < 2 || nz < 2 {
-            return Err(ClothError::BadGrid { nx, nz });
-        }
         let old = &self.cloth;
+        crate::mesh::grid_size(nx, nz, old.max_particles)?;
         let (ox, oz) = (old.nx.max(2), old.nz.max(2));
         let map = |v: u32| -> u32 {
             let (col, row) = (v as usize % ox, v as usize / ox);
@@ -750,16 +868,16 @@ impl Scene {
     }
 }
 
-/// The effect fields of a scene file, checked: the message names the field.
+/// The effect fields of a scene file, checked: the error names the field.
 fn effects_from_file(
     file: &SceneFile,
     n_vertices: usize,
-) -> std::result::Result<ClothEffects, String> {
-    let non_negative = |what: &str, v: f64| {
+) -> std::result::Result<ClothEffects, FieldError> {
+    let non_negative = |field: &str, v: f64| {
         if v >= 0.0 && v.is_finite() {
             Ok(v)
         } else {
-            Err(format!("{what} must be non-negative and finite, found {v}"))
+            Err(FieldError::new(field, "non-negative and finite", num(v)))
         }
     };
     let c = &file.cloth;
@@ -772,27 +890,31 @@ fn effects_from_file(
         forces.drag_coefficient = non_negative("air.drag_coefficient", air.drag_coefficient)?;
         let density = air.density.unwrap_or(AIR_DENSITY);
         if !(density > 0.0 && density.is_finite()) {
-            return Err(format!(
-                "air.density must be positive and finite, found {density}"
+            return Err(FieldError::new(
+                "air.density",
+                "positive and finite",
+                num(density),
             ));
         }
         forces.air_density = density;
-        if let Some(w) = air.wind.iter().find(|w| !w.is_finite()) {
-            return Err(format!("air.wind must be finite, found {w}"));
+        if !air.wind.iter().all(|w| w.is_finite()) {
+            return Err(FieldError::new("air.wind", "finite", triple(air.wind)));
         }
         forces.wind = Vector3::from(air.wind);
     }
     for (k, p) in file.point_masses.iter().enumerate() {
         if p.vertex as usize >= n_vertices {
-            return Err(format!(
-                "point_masses[{k}].vertex must be below {n_vertices} (the grid's vertices), found {}",
-                p.vertex
+            return Err(FieldError::new(
+                &format!("point_masses[{k}].vertex"),
+                format!("below {n_vertices} (the grid's vertices)"),
+                p.vertex.to_string(),
             ));
         }
         if !(p.mass > 0.0 && p.mass.is_finite()) {
-            return Err(format!(
-                "point_masses[{k}].mass must be positive and finite (kg), found {}",
-                p.mass
+            return Err(FieldError::new(
+                &format!("point_masses[{k}].mass"),
+                "positive and finite (kg)",
+                num(p.mass),
             ));
         }
     }

@@ -24,11 +24,13 @@
 //! # Ok::<(), modelgap_cloth::ClothError>(())
 //! ```
 
-use modelgap_core::io::atomic::{AtomicFile, commit_buffered};
 use std::io::{BufWriter, Seek, Write};
 use std::path::Path;
+use std::sync::Arc;
 
+use modelgap_core::fit::Cancel;
 use modelgap_core::io::Format;
+use modelgap_core::io::atomic::{AtomicFile, commit_buffered};
 use modelgap_core::io::mcap::{McapCompression, McapWriter};
 
 use crate::error::{ClothError, Result};
@@ -62,8 +64,43 @@ pub enum MarkerSelection {
     None,
 }
 
+/// The most steps a run takes by default ([`RunLimits::max_steps`]): 10 000 000, 28 hours
+/// of simulated time at the reference scenes' 0.01 s, and hours of computing at their 1 to
+/// 2 ms per step.
+pub const DEFAULT_MAX_STEPS: usize = 10_000_000;
+
+/// The most memory the recorded frames of a run take by default
+/// ([`RunLimits::max_frame_bytes`]): 2 GiB.
+pub const DEFAULT_MAX_FRAME_BYTES: u64 = 2 << 30;
+
+/// Bytes of one recorded position: three `f64`.
+pub const POSITION_BYTES: u64 = 24;
+
+/// Limits a run checks before it starts (and before it allocates anything), so that a
+/// mistyped step or duration ends in an error instead of an allocation failure. The
+/// particle limit is the cloth's own, the field `max_particles` of
+/// [`GridCloth`](crate::GridCloth) (default 1 000 000).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RunLimits {
+    /// The most steps (`duration / dt`, rounded); default [`DEFAULT_MAX_STEPS`] (10 000 000).
+    pub max_steps: usize,
+    /// The most bytes of recorded frames: frames × (vertices + markers) ×
+    /// [`POSITION_BYTES`]; default [`DEFAULT_MAX_FRAME_BYTES`] (2 GiB). Runs that record
+    /// nothing ([`MarkerSelection::None`]) are not limited by it.
+    pub max_frame_bytes: u64,
+}
+
+impl Default for RunLimits {
+    fn default() -> Self {
+        Self {
+            max_steps: DEFAULT_MAX_STEPS,
+            max_frame_bytes: DEFAULT_MAX_FRAME_BYTES,
+        }
+    }
+}
+
 /// What [`run_scene`] runs and records.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default)]
 pub struct RunOptions {
     /// Simulated time (s); default the scene's duration.
     pub duration: Option<f64>,
@@ -72,6 +109,11 @@ pub struct RunOptions {
     pub rate: Option<f64>,
     /// The vertices recorded as markers; default all.
     pub markers: MarkerSelection,
+    /// Steps and memory the run may take; default [`RunLimits::default`].
+    pub limits: RunLimits,
+    /// A flag checked between steps: once set, the run stops with
+    /// [`ClothError::Cancelled`] (the CLI sets it on Ctrl-C); default none.
+    pub cancel: Option<Arc<Cancel>>,
 }
 
 /// What a run's solver did.
@@ -133,27 +175,47 @@ pub struct ClothRun {
 
 /// Runs a scene from its start for `options.duration` (or the scene's), recording frames.
 ///
+/// The limits are checked before anything is built: the grid's particles
+/// ([`GridCloth`](crate::GridCloth)'s `max_particles`), the steps and the memory of the
+/// recorded frames ([`RunLimits`]).
+///
 /// # Errors
 ///
 /// [`ClothError::BadParameter`] for a non-positive or non-finite duration or rate;
-/// [`ClothError::VertexOutOfRange`] for a selected marker past the mesh; the scene's and
-/// the steps' errors ([`Scene::build`], [`ClothWorld::step`](crate::ClothWorld::step)).
+/// [`ClothError::TooManyParticles`], [`ClothError::TooManySteps`] or
+/// [`ClothError::TooMuchFrameMemory`] past a limit; [`ClothError::VertexOutOfRange`] for a
+/// selected marker past the mesh; [`ClothError::Cancelled`] when `options.cancel` is set
+/// between two steps; the scene's and the steps' errors ([`Scene::build`],
+/// [`ClothWorld::step`](crate::ClothWorld::step), which ends a diverged run with
+/// [`ClothError::Diverged`]).
 pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<ClothRun> {
     let duration = options.duration.unwrap_or(scene.duration);
     check_positive("duration", duration)?;
     let dt = scene.dt;
+    check_positive("dt", dt)?;
+    let limits = &options.limits;
+    let steps = (duration / dt).round();
+    // The cast below comes after this check (it would saturate, and NaN would become 0).
+    if steps.is_nan() || steps > limits.max_steps as f64 {
+        return Err(ClothError::TooManySteps {
+            steps,
+            duration,
+            dt,
+            limit: limits.max_steps,
+        });
+    }
+    let n_steps = steps as usize;
     let stride = match options.rate {
         Some(rate) => {
             check_positive("rate", rate)?;
+            // Saturates for a rate far below one frame per run: then only the ends are kept.
             ((1.0 / rate / dt).round() as usize).max(1)
         }
         None => 1,
     };
-    let mesh = scene.cloth.build_mesh()?;
-    let (mut world, cloth) = scene.build()?;
-    let n_vertices = world.positions(cloth).len();
-    let ids: Option<Vec<u32>> = match &options.markers {
-        MarkerSelection::All => Some((0..n_vertices as u32).collect()),
+    let n_vertices = scene.cloth.n_vertices()?;
+    let n_markers = match &options.markers {
+        MarkerSelection::All => Some(n_vertices),
         MarkerSelection::Ids(ids) => {
             if let Some(&bad) = ids.iter().find(|&&id| id as usize >= n_vertices) {
                 return Err(ClothError::VertexOutOfRange {
@@ -161,11 +223,31 @@ pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<ClothRun> {
                     n_vertices,
                 });
             }
-            Some(ids.clone())
+            Some(ids.len())
         }
         MarkerSelection::None => None,
     };
-    let n_steps = (duration / dt).round() as usize;
+    if let Some(n_markers) = n_markers {
+        // The start, every stride-th step, and the last step.
+        let frames = (n_steps / stride + 2) as u64;
+        let positions = (n_vertices + n_markers) as u64;
+        let bytes = u128::from(frames) * u128::from(positions) * u128::from(POSITION_BYTES);
+        if bytes > u128::from(limits.max_frame_bytes) {
+            return Err(ClothError::TooMuchFrameMemory {
+                frames,
+                positions,
+                bytes,
+                limit: limits.max_frame_bytes,
+            });
+        }
+    }
+    let mesh = scene.cloth.build_mesh()?;
+    let (mut world, cloth) = scene.build()?;
+    let ids: Option<Vec<u32>> = match &options.markers {
+        MarkerSelection::All => Some((0..n_vertices as u32).collect()),
+        MarkerSelection::Ids(ids) => Some(ids.clone()),
+        MarkerSelection::None => None,
+    };
     let mut stats = RunStats {
         n_particles: world.particles().len(),
         n_constraints: world.constraints().len(),
@@ -182,6 +264,12 @@ pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<ClothRun> {
     };
     record(0, world.positions(cloth));
     for step in 1..=n_steps {
+        if options.cancel.as_ref().is_some_and(|c| c.is_cancelled()) {
+            return Err(ClothError::Cancelled {
+                step: step - 1,
+                steps: n_steps,
+            });
+        }
         let report = world.step(dt)?;
         stats.steps = step;
         stats.total_iterations += report.iterations;

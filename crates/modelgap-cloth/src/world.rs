@@ -68,6 +68,8 @@ pub struct ClothWorld {
     external_forces: Vec<Vector3<f64>>,
     workspace: SolverWorkspace,
     time: f64,
+    /// Steps taken (successful or diverged).
+    n_steps: usize,
 }
 
 impl ClothWorld {
@@ -84,6 +86,7 @@ impl ClothWorld {
             external_forces: Vec::new(),
             workspace: SolverWorkspace::default(),
             time: 0.0,
+            n_steps: 0,
         }
     }
 
@@ -267,6 +270,12 @@ impl ClothWorld {
         self.time
     }
 
+    /// Steps taken since the world was made (a step that diverged counts).
+    #[must_use]
+    pub fn n_steps(&self) -> usize {
+        self.n_steps
+    }
+
     /// The positions of a cloth's particles (m), in its mesh's vertex order;
     /// empty for an id this world did not hand out.
     #[must_use]
@@ -344,14 +353,18 @@ impl ClothWorld {
     ///
     /// # Errors
     /// [`ClothError::BadTimeStep`] for a non-positive or non-finite `dt`,
-    /// [`ClothError::NonFinite`] when a position or velocity is NaN or
-    /// infinite (set through [`particles_mut`](Self::particles_mut)). Not
-    /// converging within the iteration limit is reported in the
-    /// [`StepReport`], not an error.
+    /// [`ClothError::BadParameter`] for solver parameters out of range
+    /// ([`SolverParams::check`]: gravity past [`MAX_GRAVITY`](crate::solver::MAX_GRAVITY),
+    /// a non-positive tolerance), [`ClothError::NonFinite`] when a position or velocity is
+    /// NaN or infinite before the step (set through [`particles_mut`](Self::particles_mut)),
+    /// [`ClothError::Diverged`] when the step ends with a non-finite position, velocity or
+    /// stretch (the world then holds that state). Not converging within the iteration
+    /// limit is reported in the [`StepReport`], not an error.
     pub fn step(&mut self, dt: f64) -> Result<StepReport> {
         if !(dt > 0.0 && dt.is_finite()) {
             return Err(ClothError::BadTimeStep { dt });
         }
+        self.params.check()?;
         self.check_finite()?;
         let h = dt;
         let g = self.params.gravity;
@@ -510,7 +523,52 @@ impl ClothWorld {
         report.n_contacts = contact::contact_velocities(&mut ps.velocities, &ws.contacts);
         ws.last_dt = Some(h);
         self.time = t_end;
+        self.n_steps += 1;
+        self.check_diverged(&report)?;
         Ok(report)
+    }
+
+    /// [`ClothError::Diverged`] when the step just taken left a non-finite position,
+    /// velocity or stretch.
+    fn check_diverged(&self, report: &StepReport) -> Result<()> {
+        let diverged = |quantity, particle: Option<usize>, value: String| {
+            Err(ClothError::Diverged {
+                step: self.n_steps,
+                time: self.time,
+                quantity,
+                particle: particle.map(|i| i as u32),
+                value,
+            })
+        };
+        let ps = &self.particles;
+        for (quantity, column) in [("position", &ps.positions), ("velocity", &ps.velocities)] {
+            if let Some((i, p)) = column
+                .iter()
+                .enumerate()
+                .find(|(_, p)| !p.iter().all(|c| c.is_finite()))
+            {
+                return diverged(quantity, Some(i), format!("[{}, {}, {}]", p.x, p.y, p.z));
+            }
+        }
+        if !report.max_stretch.is_finite() {
+            let cs = &self.constraints;
+            // Finite positions whose differences overflow: name the edge.
+            let edge = (0..cs.len()).find(|&k| !cs.stretch(k, &ps.positions).is_finite());
+            return match edge {
+                Some(k) => diverged(
+                    "stretch",
+                    None,
+                    format!(
+                        "{} on edge {}-{}",
+                        cs.stretch(k, &ps.positions),
+                        cs.a[k],
+                        cs.b[k]
+                    ),
+                ),
+                None => diverged("stretch", None, report.max_stretch.to_string()),
+            };
+        }
+        Ok(())
     }
 
     /// Advances the world by `steps` steps of `dt` seconds; the report merges
@@ -545,5 +603,60 @@ impl ClothWorld {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::GridCloth;
+
+    /// Issue 11: a step must never end `Ok` with a NaN or infinite state.
+    #[test]
+    fn a_non_finite_state_after_a_step_names_the_quantity_and_the_particle() {
+        let mut world = ClothWorld::new(SolverParams::default());
+        world.add_cloth(GridCloth::new(3, 3, 0.1).pin(0)).unwrap();
+        world.step(0.01).unwrap();
+        let finite = StepReport::default();
+        assert!(world.check_diverged(&finite).is_ok());
+        world.particles_mut().velocities[5] = Vector3::new(0.0, 0.0, f64::INFINITY);
+        let err = world.check_diverged(&finite).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "simulation diverged at step 1 (t = 0.01 s): expected a finite velocity of \
+             particle 5, found [0, 0, inf]"
+        );
+        world.particles_mut().positions[4].y = f64::NAN;
+        let err = world.check_diverged(&finite).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                ClothError::Diverged {
+                    step: 1,
+                    quantity: "position",
+                    particle: Some(4),
+                    ..
+                }
+            ),
+            "{err}"
+        );
+        let mut world = ClothWorld::new(SolverParams::default());
+        world.add_cloth(GridCloth::new(3, 3, 0.1).pin(0)).unwrap();
+        let overflowed = StepReport {
+            max_stretch: f64::INFINITY,
+            ..StepReport::default()
+        };
+        let err = world.check_diverged(&overflowed).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                ClothError::Diverged {
+                    quantity: "stretch",
+                    particle: None,
+                    ..
+                }
+            ),
+            "{err}"
+        );
     }
 }

@@ -6,12 +6,17 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use crate::error::{CoreError, Result};
+use crate::judge::recording_findings;
 use crate::model::{Model, Prediction};
 use crate::recording::Recording;
 use crate::residual::{
     FailureWindow, ResidualStats, effective_sample_size, estimate_noise_sigma, failure_windows,
     quantisation_step, stats,
 };
+
+/// Fewest samples from which a noise floor is estimated (third differences
+/// need four; a median of them a few more).
+pub const MIN_FLOOR_SAMPLES: usize = 8;
 
 /// Options of [`compare`].
 #[derive(Clone, Debug, PartialEq)]
@@ -77,6 +82,10 @@ pub struct OutputComparison {
     pub windows: Vec<FailureWindow>,
     /// Effective number of independent samples of the residual.
     pub effective_samples: f64,
+    /// Why this output cannot be judged, when it cannot (it reads a
+    /// constant throughout: its floor and its ratio to it mean nothing).
+    #[serde(default)]
+    pub finding: Option<String>,
 }
 
 impl OutputComparison {
@@ -99,6 +108,11 @@ pub struct Comparison {
     pub t: Vec<f64>,
     /// One entry per output the model predicts and the recording measures.
     pub outputs: Vec<OutputComparison>,
+    /// What keeps the recording, or an output of it, from being judged
+    /// ([`crate::judge::recording_findings`]): too few samples, a dead
+    /// sensor, a time base that hides the model's time constants.
+    #[serde(default)]
+    pub warnings: Vec<String>,
 }
 
 impl Comparison {
@@ -217,8 +231,27 @@ pub fn compare_prediction_with_spread(
         0.0
     };
     let min_window = opts.min_window.unwrap_or(5.0 * dt);
+    let names = shared_outputs(model, rec)?;
+    if t.len() < MIN_FLOOR_SAMPLES
+        && let Some(name) = names.iter().find(|n| !opts.noise.contains_key(*n))
+    {
+        return Err(CoreError::InvalidArgument {
+            name: "recording",
+            reason: format!(
+                "it has {} sample{}: at least {MIN_FLOOR_SAMPLES} are needed to estimate the noise \
+                 floor of `{name}`; give the floor of every output (--noise NAME=SIGMA)",
+                t.len(),
+                if t.len() == 1 { "" } else { "s" }
+            ),
+        });
+    }
+    let measured_all: Vec<(&str, &[f64])> = names
+        .iter()
+        .map(|n| Ok((n.as_str(), rec.values(n)?)))
+        .collect::<Result<_>>()?;
+    let findings = recording_findings(t, &measured_all, &model.time_constants(rec));
     let mut outputs = Vec::new();
-    for name in shared_outputs(model, rec)? {
+    for name in names {
         let measured = rec.values(&name)?.to_vec();
         let predicted = prediction
             .get(&name)
@@ -262,7 +295,6 @@ pub fn compare_prediction_with_spread(
             unit: model.unit(&name),
             stats: stats(&measured, &predicted),
             effective_samples: effective_sample_size(&residual),
-            name,
             measured,
             predicted,
             residual,
@@ -271,12 +303,18 @@ pub fn compare_prediction_with_spread(
             quantum,
             band,
             windows,
+            finding: findings
+                .iter()
+                .find(|f| f.output.as_deref() == Some(name.as_str()))
+                .map(|f| f.message.clone()),
+            name,
         });
     }
     Ok(Comparison {
         model: model.name(),
         t: t.to_vec(),
         outputs,
+        warnings: findings.into_iter().map(|f| f.message).collect(),
     })
 }
 

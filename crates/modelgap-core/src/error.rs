@@ -98,6 +98,29 @@ pub enum CoreError {
         path: Option<PathBuf>,
     },
 
+    /// A value is finite but beyond [`crate::recording::MAX_MAGNITUDE`] in magnitude: its
+    /// square, and the sums of squares that every statistic takes, would overflow.
+    #[error(
+        "value {} at {at} (t = {} s), column `{column}`, is beyond the largest magnitude a recording may hold ({}: squares and their sums must stay finite){}",
+        short(*.value),
+        short(*.t),
+        short(*.limit),
+        in_path(.path)
+    )]
+    OutOfRange {
+        /// Where the value sits.
+        at: Location,
+        /// The time of that sample (s); the value itself when it is the time.
+        t: f64,
+        /// The column or signal name (`t` for time).
+        column: String,
+        /// The offending value.
+        value: f64,
+        /// The largest magnitude allowed.
+        limit: f64,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
     /// A CSV file has no header line.
     #[error("no header line `t,<name>,…` found{}", in_path(.path))]
     MissingHeader {
@@ -353,6 +376,7 @@ impl CoreError {
             | Self::NonIncreasingTime { path, .. }
             | Self::NotANumber { path, .. }
             | Self::NonFinite { path, .. }
+            | Self::OutOfRange { path, .. }
             | Self::MissingHeader { path }
             | Self::MissingTimeColumn { path, .. }
             | Self::DuplicateSignal { path, .. }
@@ -384,6 +408,7 @@ impl CoreError {
             | Self::NonIncreasingTime { path, .. }
             | Self::NotANumber { path, .. }
             | Self::NonFinite { path, .. }
+            | Self::OutOfRange { path, .. }
             | Self::MissingHeader { path }
             | Self::MissingTimeColumn { path, .. }
             | Self::DuplicateSignal { path, .. }
@@ -414,6 +439,16 @@ fn in_path(path: &Option<PathBuf>) -> String {
     match path {
         Some(p) => format!(" in {}", p.display()),
         None => String::new(),
+    }
+}
+
+/// A number as a person writes it: `1.5`, `-1.7e308` (not 309 digits).
+fn short(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || !v.is_finite() || (1e-4..1e6).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
     }
 }
 

@@ -777,7 +777,9 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         .cloned()
         .collect();
     if names.is_empty() {
-        blocking.push("no measured output varies: there is nothing to judge the model by".into());
+        // Every output is dead: those findings are the reasons, not warnings.
+        warnings.clear();
+        blocking.extend(findings.iter().map(|f| f.message.clone()));
     }
     if !blocking.is_empty() {
         return cannot_judge(model, rec, &shared, opts, blocking, warnings);
@@ -1208,7 +1210,13 @@ fn cannot_judge(
             continue;
         };
         let resid: Vec<f64> = measured.iter().zip(p).map(|(m, p)| m - p).collect();
-        let floor = noise_floor(name, measured, &opts.noise).sigma;
+        // A constant output shows no noise at all.
+        let flat = measured.iter().all(|v| *v == measured[0]);
+        let floor = if flat {
+            0.0
+        } else {
+            noise_floor(name, measured, &opts.noise).sigma
+        };
         let rms_before = rms(&resid);
         outputs.push(OutputSummary {
             name: name.clone(),
@@ -1489,6 +1497,62 @@ mod tests {
         .unwrap();
         assert_eq!(ex.verdict, Verdict::Partial);
         assert!(!ex.outputs[0].remaining_windows.is_empty());
+    }
+
+    #[test]
+    fn an_interrupted_explain_has_no_verdict_and_ranks_only_finished_fits() {
+        let rec = recording(|_| 0.3, 0.01, 0.0, 1);
+        // Stopped before it starts: nothing finished, nothing chosen.
+        let cancel = Arc::new(Cancel::new());
+        cancel.cancel();
+        let opts = ExplainOptions {
+            cancel: Some(cancel),
+            ..ExplainOptions::default()
+        };
+        let ex = explain(&Toy, &rec, &opts).unwrap();
+        assert_eq!(ex.verdict, Verdict::Interrupted);
+        assert!(ex.chosen.is_empty() && ex.ranked.is_empty(), "{ex:?}");
+        assert!(ex.reasons[0].contains("0 of 3"), "{:?}", ex.reasons);
+        // Stopped after the first finished fit (fits run one at a time here).
+        let cancel = Arc::new(Cancel::new());
+        let stop = cancel.clone();
+        let opts = ExplainOptions {
+            cancel: Some(cancel),
+            progress: Some(Arc::new(move |done, _| {
+                if done == 1 {
+                    stop.cancel();
+                }
+            })),
+            ..ExplainOptions::default()
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let ex = pool.install(|| explain(&Toy, &rec, &opts)).unwrap();
+        assert_eq!(ex.verdict, Verdict::Interrupted);
+        assert!(ex.chosen.is_empty());
+        assert!(ex.ranked.len() <= 1, "{:?}", ex.ranked);
+        assert!(
+            ex.ranked
+                .iter()
+                .all(|r| r.termination != Termination::Cancelled),
+            "{:?}",
+            ex.ranked
+        );
+    }
+
+    #[test]
+    fn a_flat_toy_output_cannot_be_judged() {
+        let t: Vec<f64> = (0..200).map(|k| f64::from(k) * 1e-3).collect();
+        let rec = Recording::new(t, vec![Signal::new("y", vec![0.5; 200])]).unwrap();
+        let ex = explain(&Toy, &rec, &ExplainOptions::default()).unwrap();
+        assert_eq!(ex.verdict, Verdict::CannotJudge);
+        assert!(
+            ex.reasons[0].contains("reads 0.5 throughout"),
+            "{:?}",
+            ex.reasons
+        );
     }
 
     #[test]

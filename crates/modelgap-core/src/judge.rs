@@ -16,7 +16,10 @@
 //!    low order) and the tests below pass. A floor the user gave is the
 //!    noise's whole σ and is taken as it is.
 //! 2. **No failure window**: the residual never leaves its band of
-//!    `band_sigmas` noise σ for five sample periods or more.
+//!    `band_sigmas` noise σ for five sample periods or more (for coloured
+//!    noise, which wanders beyond 4σ in long excursions, a band wide enough to
+//!    hold the false-alarm rate below over the recording's independent
+//!    stretches).
 //! 3. **No input correlation** (Haugh's test): the innovations of the
 //!    residual's noise model are uncorrelated with the innovations of each
 //!    recorded input at lags 0 to [`INPUT_LAGS`] samples. Noise does not know
@@ -248,7 +251,7 @@ pub struct Judgement {
     pub bias_z: f64,
     /// The strongest input correlation, when the model has recorded inputs.
     pub input: Option<InputCorrelation>,
-    /// Failure windows against `band_sigmas` × `noise_sigma`.
+    /// Failure windows against `band_sigmas` × `noise_sigma` (wider for coloured noise).
     pub windows: usize,
     /// The measurement's quantisation step, when it is quantised: a residual
     /// within rounding plus noise is not held against the inputs.
@@ -404,12 +407,23 @@ pub fn judge_residual(
     } else {
         0.0
     };
-    let windows = failure_windows(t, residual, opts.band_sigmas * noise_sigma, 5.0 * dt).len();
+    // White noise rarely stays beyond 4σ for five samples; coloured noise wanders there in
+    // long excursions, so its band is widened to hold the family-wise rate over the
+    // recording's independent stretches (n / correlation time of them, per output).
+    let sigmas = if coloured {
+        let stretches = (n as f64 / correlation_samples).max(1.0);
+        opts.band_sigmas.max(normal_upper_quantile(
+            TEST_ALPHA / (2.0 * opts.outputs.max(1) as f64 * stretches),
+        ))
+    } else {
+        opts.band_sigmas
+    };
+    let windows = failure_windows(t, residual, sigmas * noise_sigma, 5.0 * dt).len();
     if windows > 0 {
         reasons.push(format!(
             "leaves its band of ±{} ({} {}noise σ) in {windows} window(s)",
-            format_number(opts.band_sigmas * noise_sigma),
-            format_number(opts.band_sigmas),
+            format_number(sigmas * noise_sigma),
+            format_number(sigmas),
             if coloured { "coloured " } else { "" }
         ));
     }

@@ -7,6 +7,15 @@ use crate::error::{CoreError, Location, Result};
 /// The reserved name of the time column; no signal may use it.
 pub const TIME_NAME: &str = "t";
 
+/// The largest magnitude a recording holds, in any column (time included): `1e100`.
+///
+/// Statistics square values and sum the squares (RMS, noise floors, fits); beyond about
+/// `1.3e154` a square overflows to infinity and a comparison would read NaN. `1e100` leaves
+/// room for squares (`1e200`) summed over any number of samples, and is far beyond any
+/// physical measurement in SI units. A larger value is refused where the recording is made,
+/// with [`CoreError::OutOfRange`] naming the sample and the column.
+pub const MAX_MAGNITUDE: f64 = 1e100;
+
 /// One named signal: a value per time sample of its [`Recording`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Signal {
@@ -29,8 +38,10 @@ impl Signal {
 /// Sampled signals sharing one time axis.
 ///
 /// Invariants, checked by [`Recording::new`] and kept by every method: at least one sample;
-/// time finite and strictly increasing (s); every signal finite, one value per time sample,
-/// with a unique, non-empty name other than `t`. Past this type, code may assume finite data.
+/// time finite and strictly increasing (s); every value, time included, finite and at most
+/// [`MAX_MAGNITUDE`] in magnitude; one value per time sample for every signal, with a
+/// unique, non-empty name other than `t`. Past this type, code may assume finite data whose
+/// squares and sums of squares are finite.
 ///
 /// Deserializing (serde) checks the same invariants.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -60,7 +71,8 @@ impl Recording {
     ///
     /// # Errors
     ///
-    /// [`CoreError::EmptyRecording`] when `t` is empty; [`CoreError::NonFinite`] or
+    /// [`CoreError::EmptyRecording`] when `t` is empty; [`CoreError::NonFinite`],
+    /// [`CoreError::OutOfRange`] (beyond [`MAX_MAGNITUDE`]) or
     /// [`CoreError::NonIncreasingTime`] (with the sample index) for a bad time or value;
     /// [`CoreError::LengthMismatch`], [`CoreError::InvalidSignalName`] or
     /// [`CoreError::DuplicateSignal`] for a bad signal.
@@ -140,7 +152,8 @@ impl Recording {
     /// # Errors
     ///
     /// [`CoreError::LengthMismatch`] when it has not one value per time sample,
-    /// [`CoreError::NonFinite`] for a NaN or infinite value, [`CoreError::InvalidSignalName`]
+    /// [`CoreError::NonFinite`] for a NaN or infinite value, [`CoreError::OutOfRange`] for a
+    /// value beyond [`MAX_MAGNITUDE`], [`CoreError::InvalidSignalName`]
     /// for an empty name or `t`, [`CoreError::DuplicateSignal`] when the name is taken. The
     /// recording is unchanged on error.
     pub fn push_signal(&mut self, signal: Signal) -> Result<()> {
@@ -169,6 +182,21 @@ impl Recording {
                 at: Location::Sample(i),
                 column: signal.name,
                 value,
+                path: None,
+            });
+        }
+        if let Some((i, &value)) = signal
+            .values
+            .iter()
+            .enumerate()
+            .find(|(_, v)| v.abs() > MAX_MAGNITUDE)
+        {
+            return Err(CoreError::OutOfRange {
+                at: Location::Sample(i),
+                t: self.t[i],
+                column: signal.name,
+                value,
+                limit: MAX_MAGNITUDE,
                 path: None,
             });
         }
@@ -280,6 +308,16 @@ fn check_time(t: &[f64]) -> Result<()> {
                 path: None,
             });
         }
+        if ti.abs() > MAX_MAGNITUDE {
+            return Err(CoreError::OutOfRange {
+                at: Location::Sample(i),
+                t: ti,
+                column: TIME_NAME.to_owned(),
+                value: ti,
+                limit: MAX_MAGNITUDE,
+                path: None,
+            });
+        }
         if i > 0 && ti <= t[i - 1] {
             return Err(CoreError::NonIncreasingTime {
                 at: Location::Sample(i),
@@ -362,6 +400,36 @@ mod tests {
             e,
             CoreError::NonFinite { at: Location::Sample(1), ref column, .. } if column == "i"
         ));
+    }
+
+    /// Issue 11: a value near `f64::MAX` made compare print `NaN× the noise floor`.
+    #[test]
+    fn new_rejects_huge_finite_values_naming_sample_and_column() {
+        let e = Recording::new(
+            vec![0.0, 0.5, 1.0],
+            vec![Signal::new("omega", vec![1.0, 2.0, -1.7e308])],
+        )
+        .unwrap_err();
+        assert!(matches!(
+            e,
+            CoreError::OutOfRange { at: Location::Sample(2), ref column, value, t, .. }
+                if column == "omega" && value == -1.7e308 && t == 1.0
+        ));
+        let text = e.to_string();
+        assert!(
+            text.contains("sample 2") && text.contains("`omega`") && text.contains("1e100"),
+            "{text}"
+        );
+        let e = Recording::new(vec![0.0, 2e100], vec![]).unwrap_err();
+        assert!(matches!(e, CoreError::OutOfRange { ref column, .. } if column == "t"));
+        // The limit itself is accepted: its square and sums of squares stay finite.
+        let rec = Recording::new(
+            vec![0.0, 1.0],
+            vec![Signal::new("x", vec![MAX_MAGNITUDE, -MAX_MAGNITUDE])],
+        )
+        .unwrap();
+        let sum_sq: f64 = rec.values("x").unwrap().iter().map(|v| v * v).sum();
+        assert!(sum_sq.is_finite());
     }
 
     #[test]

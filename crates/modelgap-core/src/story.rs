@@ -57,12 +57,14 @@ pub fn verdict_sentence(ex: &Explanation) -> String {
              explains any of it significantly."
                 .to_string()
         }
-        Verdict::CannotJudge => format!(
-            "Cannot judge: {}.",
-            ex.reasons
+        Verdict::CannotJudge => {
+            let why = ex
+                .reasons
                 .first()
-                .map_or("the recording cannot be judged", String::as_str)
-        ),
+                .map_or("the recording cannot be judged", String::as_str);
+            let stop = if why.ends_with(['?', '.']) { "" } else { "." };
+            format!("Cannot judge: {why}{stop}")
+        }
         Verdict::Interrupted => {
             "Interrupted before a verdict: no effect was chosen and nothing was written."
                 .to_string()
@@ -81,6 +83,17 @@ pub fn comparison_text(c: &Comparison) -> String {
         num(c.t.last().copied().unwrap_or(0.0) - c.t.first().copied().unwrap_or(0.0))
     );
     for o in &c.outputs {
+        if let Some(f) = &o.finding {
+            let _ = writeln!(
+                s,
+                "  {:<8} RMS {} {}, max {}: not judged ({f})",
+                o.name,
+                num(o.stats.rms),
+                o.unit,
+                num(o.stats.max_abs),
+            );
+            continue;
+        }
         let _ = writeln!(
             s,
             "  {:<8} RMS {} {} ({:.1}× the noise floor {}), max {}, normalised RMS {:.2} %",
@@ -92,6 +105,14 @@ pub fn comparison_text(c: &Comparison) -> String {
             num(o.stats.max_abs),
             100.0 * o.stats.nrms
         );
+        if let Some(q) = o.quantum {
+            let _ = writeln!(
+                s,
+                "           quantised in steps of {} {}: the floor includes their rounding error",
+                num(q),
+                o.unit
+            );
+        }
         if o.windows.is_empty() {
             let _ = writeln!(
                 s,
@@ -127,6 +148,13 @@ pub fn comparison_text(c: &Comparison) -> String {
                 shown.join(", ")
             );
         }
+    }
+    for w in c
+        .warnings
+        .iter()
+        .filter(|w| !c.outputs.iter().any(|o| o.finding.as_ref() == Some(*w)))
+    {
+        let _ = writeln!(s, "warning: {w}");
     }
     s
 }

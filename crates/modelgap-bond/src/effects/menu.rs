@@ -66,7 +66,9 @@ fn law_value(g: &BondGraph, e: &Expr) -> Option<f64> {
 
 /// The deviation/fault parameter of an existing parameter: bounds [v/5, 5v]
 /// (a factor of five either way), scale |v|; a zero nominal gets [−s, s]
-/// with `s` the scale of the quantity it multiplies (see [`zero_scale`]).
+/// with `s` the scale of the quantity it multiplies (see [`zero_scale`]),
+/// or [0, s] when it is the resistance of a linear R (which cannot be
+/// negative: [`BondGraph::check_coefficients`]).
 fn value_param(g: &BondGraph, scales: &Scales, name: &str, value: f64, unit: &str) -> EffectParam {
     if value > 0.0 {
         param(name, unit, value, (value / 5.0, value * 5.0), value)
@@ -74,7 +76,12 @@ fn value_param(g: &BondGraph, scales: &Scales, name: &str, value: f64, unit: &st
         param(name, unit, value, (value * 5.0, value / 5.0), -value)
     } else {
         let s = zero_scale(g, scales, name);
-        param(name, unit, 0.0, (-s, s), s)
+        let resistance = g.element_ids().any(|id| {
+            let el = g.element(id);
+            el.kind == ElementKind::R && el.law == Law::Linear(Expr::Param(name.to_string()))
+        });
+        let lower = if resistance { 0.0 } else { -s };
+        param(name, unit, 0.0, (lower, s), s)
     }
 }
 

@@ -1,12 +1,16 @@
 //! Why a solve stops early.
 
+use crate::error::num;
+
 /// Why [`solve`](crate::ode::solve) stopped without reaching the last output time.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum OdeError {
     /// The step size fell below what the time's precision can resolve.
     #[error(
-        "step size underflow at t = {t} s: a step of {h} s is too small to advance the solution"
+        "step size underflow at t = {} s: a step of {} s is too small to advance the solution",
+        num(*t),
+        num(*h)
     )]
     StepSizeUnderflow {
         /// Time reached, in s.
@@ -15,7 +19,7 @@ pub enum OdeError {
         h: f64,
     },
     /// A state or its derivative became NaN or infinite.
-    #[error("state {component} or its derivative is not finite at t = {t} s")]
+    #[error("state {component} or its derivative is not finite at t = {} s", num(*t))]
     NonFinite {
         /// Time at which it was found (the last finite state), in s.
         t: f64,
@@ -24,7 +28,10 @@ pub enum OdeError {
     },
     /// The step budget
     /// [`OdeOptions::max_steps`](crate::ode::OdeOptions::max_steps) ran out.
-    #[error("gave up at t = {t} s after {max_steps} steps (the limit set by max_steps)")]
+    #[error(
+        "gave up at t = {} s after {max_steps} steps (the limit set by max_steps)",
+        num(*t)
+    )]
     TooManySteps {
         /// Time reached, in s.
         t: f64,
@@ -32,7 +39,10 @@ pub enum OdeError {
         max_steps: usize,
     },
     /// The Rosenbrock matrix `I/(γh) − J` stayed singular after halving the step 5 times.
-    #[error("the matrix I/(gamma h) - J is singular at t = {t} s, even with smaller steps")]
+    #[error(
+        "the matrix I/(gamma h) - J is singular at t = {} s, even with smaller steps",
+        num(*t)
+    )]
     SingularMatrix {
         /// Time reached, in s.
         t: f64,

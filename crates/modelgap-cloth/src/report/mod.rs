@@ -38,9 +38,11 @@
 //!     stats: modelgap_core::residual::stats(&[0.0; 3], &residual.map(|r| -r)),
 //!     noise_floor: 1e-4,
 //!     noise_given: true,
+//!     quantum: None,
 //!     band: 4e-4,
 //!     windows: Vec::new(),
 //!     effective_samples: 3.0,
+//!     finding: None,
 //! };
 //! let mut outputs = Vec::new();
 //! for axis in ["x", "y", "z"] {
@@ -48,7 +50,7 @@
 //!     let drift = if axis == "y" { [0.0, 0.005, 0.01] } else { [0.0; 3] };
 //!     outputs.push(output(&format!("m8.{axis}"), drift));
 //! }
-//! let c = Comparison { model: "corner".into(), t: vec![0.0, 0.01, 0.02], outputs };
+//! let c = Comparison { model: "corner".into(), t: vec![0.0, 0.01, 0.02], outputs, warnings: vec![] };
 //! let cloth = ClothComparison::new(&c, &GridCloth::new(3, 3, 0.1).pin(0))?;
 //! assert_eq!(cloth.worst_markers(1)[0].id, 8);
 //! assert!(comparison_text(&cloth, 5).contains("m8"));
@@ -614,11 +616,13 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
     let mut s = String::new();
     let names = || ex.outputs.iter().map(|o| o.name.as_str());
     let (before, after, floor) = explanation_rms(ex);
-    let _ = writeln!(
-        s,
-        "candidate effects, best first (score = evidence, a BIC difference with {} effective samples):",
-        format_number(ex.effective_samples)
-    );
+    if !ex.ranked.is_empty() {
+        let _ = writeln!(
+            s,
+            "candidate effects, best first (score = evidence, a BIC difference with {} effective samples):",
+            format_number(ex.effective_samples)
+        );
+    }
     for (i, r) in ex.ranked.iter().take(top).enumerate() {
         let params: Vec<String> = r.params.iter().map(param_text).collect();
         let left = marker_rms(names(), r.rms_after.iter().copied());
@@ -644,16 +648,22 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
             let _ = writeln!(s, "      fit failed: {e}");
         }
     }
-    let _ = writeln!(s, "margin to the runner-up: {}", format_number(ex.margin));
+    if !ex.ranked.is_empty() {
+        let _ = writeln!(s, "margin to the runner-up: {}", format_number(ex.margin));
+    }
     let _ = writeln!(s, "\nverdict: {}", verdict_sentence(ex));
-    let _ = writeln!(
-        s,
-        "  marker RMS {} → {} (noise floor {}, {:.2}× the floor after)",
-        mm(before),
-        mm(after),
-        mm(floor),
-        ratio(after, floor)
-    );
+    if matches!(ex.verdict, Verdict::CannotJudge | Verdict::Interrupted) {
+        let _ = writeln!(s, "  marker RMS {} (not judged)", mm(before));
+    } else {
+        let _ = writeln!(
+            s,
+            "  marker RMS {} → {} (noise floor {}, {:.2}× the floor after)",
+            mm(before),
+            mm(after),
+            mm(floor),
+            ratio(after, floor)
+        );
+    }
     if ex.verdict == Verdict::Partial {
         let failing = ex
             .outputs
@@ -668,6 +678,19 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
                 failing.len()
             );
         }
+    }
+    // Among dozens of marker coordinates, the first few reasons say enough.
+    const SHOWN: usize = 6;
+    let skip = usize::from(ex.verdict == Verdict::CannotJudge);
+    for r in ex.reasons.iter().skip(skip).take(SHOWN) {
+        let _ = writeln!(s, "  why: {r}");
+    }
+    if ex.reasons.len() > skip + SHOWN {
+        let _ = writeln!(
+            s,
+            "  why: … and {} more coordinates",
+            ex.reasons.len() - skip - SHOWN
+        );
     }
     for w in &ex.warnings {
         let _ = writeln!(s, "warning: {w}");

@@ -26,6 +26,7 @@ fn output(name: String, t: &[f64], residual: Vec<f64>) -> OutputComparison {
         noise_floor: FLOOR,
         noise_given: true,
         quantum: None,
+        finding: None,
         band: 4.0 * FLOOR,
         windows,
         effective_samples: 10.0,
@@ -60,6 +61,7 @@ fn comparison(grow: bool) -> (Comparison, GridCloth) {
             model: "grid".into(),
             t,
             outputs,
+            warnings: Vec::new(),
         },
         cloth,
     )

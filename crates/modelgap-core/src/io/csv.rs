@@ -213,6 +213,20 @@ fn parse_row(
                 path: None,
             });
         }
+        if value.abs() > crate::recording::MAX_MAGNITUDE {
+            return Err(CoreError::OutOfRange {
+                at: Location::Line(line_no),
+                t: if col == 0 {
+                    value
+                } else {
+                    t.last().copied().unwrap_or(f64::NAN)
+                },
+                column: column.to_owned(),
+                value,
+                limit: crate::recording::MAX_MAGNITUDE,
+                path: None,
+            });
+        }
         if col == 0 {
             if let Some(&t_prev) = t.last()
                 && value <= t_prev
@@ -388,7 +402,7 @@ mod tests {
             .collect();
         let mut b: Vec<f64> = (0..n).map(|k| f64::from(k).exp() * 1e-300).collect();
         b[0] = -0.0;
-        b[1] = f64::MAX;
+        b[1] = crate::recording::MAX_MAGNITUDE;
         b[2] = f64::MIN_POSITIVE;
         b[3] = 5e-324;
         let rec = Recording::new(t, vec![Signal::new("a", a), Signal::new("b", b)]).unwrap();

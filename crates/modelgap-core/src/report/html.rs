@@ -152,7 +152,7 @@ pub fn render_html(report: &Report) -> String {
 ///
 /// # Errors
 ///
-/// The errors of [`Report::validate`]; [`CoreError::Io`] when the file cannot be written.
+/// The errors of [`Report::validate`]; [`CoreError::Io`](crate::CoreError::Io) when the file cannot be written.
 pub fn write_html(report: &Report, path: &Path) -> Result<()> {
     report.validate()?;
     crate::io::atomic::write_atomic(path, render_html(report).as_bytes())

@@ -322,12 +322,11 @@ mod tests {
     }
 
     #[test]
-    fn dropped_writer_still_finishes_the_file() {
-        let dir = std::env::temp_dir().join(format!("modelgap-core-mcap-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("dropped.mcap");
+    fn dropped_writer_still_finishes_its_stream() {
+        let mut bytes = Vec::new();
         {
-            let mut w = McapWriter::create(&path, McapCompression::Zstd).unwrap();
+            let mut w =
+                McapWriter::new(std::io::Cursor::new(&mut bytes), McapCompression::Zstd).unwrap();
             let c = w
                 .add_json_channel("/signals", "X", &number_object_schema("X", &["x"]))
                 .unwrap();
@@ -337,8 +336,40 @@ mod tests {
                 .unwrap();
             // Dropped without finish().
         }
-        let rec = read_signals_path(&path, DEFAULT_SIGNAL_TOPIC).unwrap();
+        let rec = super::super::read_signals(&bytes, DEFAULT_SIGNAL_TOPIC).unwrap();
         assert_eq!(rec.values("x").unwrap(), &[1.0, 2.0]);
+    }
+
+    #[test]
+    fn a_file_dropped_before_finish_file_leaves_the_earlier_file() {
+        let dir = std::env::temp_dir().join(format!("modelgap-core-mcap-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("dropped.mcap");
+        std::fs::write(&path, b"an earlier file").unwrap();
+        {
+            let mut w = McapWriter::create(&path, McapCompression::Zstd).unwrap();
+            let c = w
+                .add_json_channel("/signals", "X", &number_object_schema("X", &["x"]))
+                .unwrap();
+            w.write_json(c, 0.0, &serde_json::json!({ "x": 1.0 }))
+                .unwrap();
+            // Dropped without finish_file(): an interrupted run.
+        }
+        assert_eq!(std::fs::read(&path).unwrap(), b"an earlier file");
+        let mut w = McapWriter::create(&path, McapCompression::Zstd).unwrap();
+        let c = w
+            .add_json_channel("/signals", "X", &number_object_schema("X", &["x"]))
+            .unwrap();
+        w.write_json(c, 0.0, &serde_json::json!({ "x": 3.0 }))
+            .unwrap();
+        w.finish_file().unwrap();
+        let rec = read_signals_path(&path, DEFAULT_SIGNAL_TOPIC).unwrap();
+        assert_eq!(rec.values("x").unwrap(), &[3.0]);
+        assert_eq!(
+            std::fs::read_dir(&dir).unwrap().count(),
+            1,
+            "no temporary file left"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
