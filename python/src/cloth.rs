@@ -1514,7 +1514,8 @@ impl PyScene {
     }
 
     /// A world holding the scene (cloth id 0); pinned vertices whose ids are in ``markers``
-    /// follow that recording.
+    /// follow that recording. The scene's effects (drag, damping, point masses, ...) are
+    /// not in it: ``run()`` and ``ClothModel`` step with them.
     #[pyo3(signature = (markers = None))]
     fn world(&self, markers: Option<&Bound<'_, PyMarkerRecording>>) -> PyResult<PyClothWorld> {
         let markers = markers.map(|m| &m.get().inner);

@@ -54,6 +54,7 @@ pub mod model;
 pub mod newton;
 pub mod particles;
 pub mod report;
+pub mod scene_world;
 pub mod scenes;
 pub mod solver;
 pub mod strips;

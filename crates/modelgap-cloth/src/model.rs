@@ -75,8 +75,9 @@ use modelgap_core::{
 use nalgebra::Vector3;
 
 use crate::error::{ClothError, Result};
-use crate::forces::{BendPair, PointMass, grid_bend_pairs};
+use crate::forces::PointMass;
 use crate::markers::MarkerRecording;
+use crate::scene_world::SceneWorld;
 use crate::scenes::Scene;
 use crate::solver::Method;
 
@@ -343,8 +344,8 @@ pub fn simulate_markers(
     settings: &PredictSettings,
     pins: Option<&MarkerRecording>,
 ) -> Result<MarkerRecording> {
-    let (mut world, cloth) = scene.build_with_markers(pins)?;
-    let n = world.positions(cloth).len();
+    let mut sw = SceneWorld::new(scene, pins)?;
+    let n = sw.positions().len();
     if let Some(&bad) = ids.iter().find(|&&id| id as usize >= n) {
         return Err(ClothError::VertexOutOfRange {
             vertex: bad as usize,
@@ -352,28 +353,17 @@ pub fn simulate_markers(
         });
     }
     {
-        let p = world.params_mut();
+        let p = sw.world.params_mut();
         p.method = settings.method;
         p.max_iterations = settings.max_iterations;
         if let Some(tol) = settings.stretch_tolerance {
             p.stretch_tolerance = tol;
         }
     }
-    let effects = &scene.effects;
-    if effects.compliance > 0.0 {
-        world.set_compliance(cloth, effects.compliance)?;
-    }
-    for pm in &effects.point_masses {
-        let particle = world.particle(cloth, pm.vertex as usize)?;
-        let k = world.particles().inv_mass[particle.index()];
-        if k > 0.0 {
-            world.set_particle_mass(particle, 1.0 / k + pm.mass)?;
-        }
-    }
-    let first = world.particle(cloth, 0)?.index();
     if settings.perturbation > 0.0 {
+        let first = sw.world.particle(sw.cloth, 0)?.index();
         let mut g = Gaussian::new(settings.seed);
-        let ps = world.particles_mut();
+        let ps = sw.world.particles_mut();
         for i in first..first + n {
             if ps.inv_mass[i] > 0.0 {
                 let d = Vector3::new(g.sample(), g.sample(), g.sample());
@@ -381,18 +371,6 @@ pub fn simulate_markers(
             }
         }
     }
-    let masses: Vec<f64> = world.particles().inv_mass[first..first + n]
-        .iter()
-        .map(|&k| if k > 0.0 { 1.0 / k } else { 0.0 })
-        .collect();
-    let forces = &effects.forces;
-    let bend: Vec<BendPair> = if forces.bend_stiffness > 0.0 {
-        grid_bend_pairs(scene.cloth.nx, scene.cloth.nz, world.positions(cloth))
-    } else {
-        Vec::new()
-    };
-    let triangles = world.triangles(cloth).to_vec();
-    let mut out = vec![Vector3::zeros(); n];
     let h = scene.dt / settings.step_divisor.max(1) as f64;
     let take = |x: &[Vector3<f64>]| -> Vec<[f64; 3]> {
         ids.iter()
@@ -404,26 +382,15 @@ pub fn simulate_markers(
     };
     let mut frames = Vec::with_capacity(t.len());
     let mut steps = 0usize;
-    let mut prev = take(world.positions(cloth));
+    let mut prev = take(sw.positions());
     for &tj in t {
         // Step until the step's end reaches the sample (to within rounding).
         while (steps as f64) * h < tj - 1e-9 * h {
-            prev = take(world.positions(cloth));
-            if !forces.is_none() {
-                forces.evaluate(
-                    world.positions(cloth),
-                    world.velocities(cloth),
-                    &masses,
-                    &triangles,
-                    &bend,
-                    &mut out,
-                );
-                world.external_forces_mut()[first..first + n].copy_from_slice(&out);
-            }
-            world.step(h)?;
+            prev = take(sw.positions());
+            sw.step(h)?;
             steps += 1;
         }
-        let now = take(world.positions(cloth));
+        let now = take(sw.positions());
         let t_now = steps as f64 * h;
         if steps == 0 || (t_now - tj).abs() <= 1e-9 * h {
             frames.push(now);

@@ -817,7 +817,8 @@ impl Scene {
 
     /// A world holding the scene's cloth and colliders, and the cloth's id.
     /// Its kinematic pins follow their paths, and with `pins_from_markers` the pinned
-    /// vertices in the `pin_markers` recording follow it.
+    /// vertices in the `pin_markers` recording follow it. The scene's effects are not in
+    /// it: [`SceneWorld`](crate::scene_world::SceneWorld) adds them and steps with them.
     ///
     /// # Errors
     /// The cloth's errors (see [`ClothWorld::add_cloth`]); with `pins_from_markers`, the

@@ -24,6 +24,7 @@
 //! # Ok::<(), modelgap_cloth::ClothError>(())
 //! ```
 
+use crate::scene_world::SceneWorld;
 use std::io::{BufWriter, Seek, Write};
 use std::path::Path;
 use std::sync::Arc;
@@ -173,7 +174,9 @@ pub struct ClothRun {
     pub stats: RunStats,
 }
 
-/// Runs a scene from its start for `options.duration` (or the scene's), recording frames.
+/// Runs a scene from its start for `options.duration` (or the scene's), recording frames,
+/// with the scene's effects — drag, wind, damping, bending, compliance, point masses — as
+/// the measurement loop predicts it ([`SceneWorld`]).
 ///
 /// The limits are checked before anything is built: the grid's particles
 /// ([`GridCloth`](crate::GridCloth)'s `max_particles`), the steps and the memory of the
@@ -242,15 +245,16 @@ pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<ClothRun> {
         }
     }
     let mesh = scene.cloth.build_mesh()?;
-    let (mut world, cloth) = scene.build()?;
+    // The scene with its effects (compliance, point masses, drag, damping, bending).
+    let mut sw = SceneWorld::new(scene, None)?;
     let ids: Option<Vec<u32>> = match &options.markers {
         MarkerSelection::All => Some((0..n_vertices as u32).collect()),
         MarkerSelection::Ids(ids) => Some(ids.clone()),
         MarkerSelection::None => None,
     };
     let mut stats = RunStats {
-        n_particles: world.particles().len(),
-        n_constraints: world.constraints().len(),
+        n_particles: sw.world.particles().len(),
+        n_constraints: sw.world.constraints().len(),
         dt,
         ..RunStats::default()
     };
@@ -262,7 +266,7 @@ pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<ClothRun> {
             mesh_frames.push(positions.iter().map(|p| [p.x, p.y, p.z]).collect());
         }
     };
-    record(0, world.positions(cloth));
+    record(0, sw.positions());
     for step in 1..=n_steps {
         if options.cancel.as_ref().is_some_and(|c| c.is_cancelled()) {
             return Err(ClothError::Cancelled {
@@ -270,14 +274,14 @@ pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<ClothRun> {
                 steps: n_steps,
             });
         }
-        let report = world.step(dt)?;
+        let report = sw.step(dt)?;
         stats.steps = step;
         stats.total_iterations += report.iterations;
         stats.max_iterations = stats.max_iterations.max(report.iterations);
         stats.max_stretch = stats.max_stretch.max(report.max_stretch);
         stats.unconverged_steps += usize::from(!report.converged);
         if step % stride == 0 || step == n_steps {
-            record(step, world.positions(cloth));
+            record(step, sw.positions());
         }
     }
     let markers = match &ids {
