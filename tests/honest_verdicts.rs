@@ -137,56 +137,70 @@ fn a_recording_of_a_few_samples_cannot_be_judged() {
     }
 }
 
-/// Verdicts of the right model over `seeds` noise seeds.
-fn control_verdicts(opts: &RecordingOptions, seeds: std::ops::Range<u64>) -> Vec<(u64, Verdict)> {
+/// Explains the right model's recordings over `seeds` noise seeds and returns the seeds
+/// whose verdict is not "nothing is missing" (the false alarms), with their verdict.
+fn false_alarms(
+    case_name: &str,
+    opts: &RecordingOptions,
+    seeds: std::ops::Range<u64>,
+) -> Vec<(u64, Verdict)> {
+    let c = case(case_name);
+    let model = BondModel::new(library::builtin(&c.model).unwrap());
     seeds
-        .map(|seed| {
+        .filter_map(|seed| {
             let rec = record(
-                &case("nothing"),
+                &c,
                 &RecordingOptions {
                     seed,
                     ..opts.clone()
                 },
             )
             .unwrap();
-            (seed, explained(&rec).verdict)
+            let v = explain(&model, &rec, &ExplainOptions::default())
+                .unwrap()
+                .verdict;
+            (v != Verdict::NothingMissing).then_some((seed, v))
         })
         .collect()
 }
 
-#[test]
-fn right_model_on_white_noise_gets_nothing_missing_over_20_seeds() {
-    let white = RecordingOptions {
+fn white_noise() -> RecordingOptions {
+    RecordingOptions {
         white: 0.002,
         coloured: 0.0,
         sensor_lag: 0.0,
-        duration: 2.0,
         ..RecordingOptions::default()
+    }
+}
+
+/// Mostly AR(1) noise with ρ = 0.95: the third-difference floor sees a sixth of it, and the
+/// judge must take the rest for noise.
+fn coloured_noise() -> RecordingOptions {
+    RecordingOptions {
+        white: 0.0005,
+        coloured: 0.003,
+        rho: 0.95,
+        ..RecordingOptions::default()
+    }
+}
+
+#[test]
+fn right_model_on_white_noise_gets_nothing_missing_over_20_seeds() {
+    let short = RecordingOptions {
+        duration: 2.0,
+        ..white_noise()
     };
-    let v = control_verdicts(&white, 100..120);
-    let alarms: Vec<_> = v
-        .iter()
-        .filter(|(_, v)| *v != Verdict::NothingMissing)
-        .collect();
+    let alarms = false_alarms("nothing", &short, 100..120);
     assert!(alarms.is_empty(), "false alarms: {alarms:?}");
 }
 
 #[test]
 fn right_model_on_coloured_noise_gets_nothing_missing_over_20_seeds() {
-    // Mostly AR(1) noise with ρ = 0.95: the third-difference floor sees a
-    // sixth of it, and the judge must take the rest for noise.
-    let coloured = RecordingOptions {
-        white: 0.0005,
-        coloured: 0.003,
-        rho: 0.95,
+    let short = RecordingOptions {
         duration: 2.0,
-        ..RecordingOptions::default()
+        ..coloured_noise()
     };
-    let v = control_verdicts(&coloured, 200..220);
-    let alarms: Vec<_> = v
-        .iter()
-        .filter(|(_, v)| *v != Verdict::NothingMissing)
-        .collect();
+    let alarms = false_alarms("nothing", &short, 200..220);
     assert!(alarms.is_empty(), "false alarms: {alarms:?}");
 }
 
@@ -195,59 +209,32 @@ fn right_model_on_coloured_noise_gets_nothing_missing_over_20_seeds() {
 #[test]
 #[ignore = "long: 260 explains; prints the false-alarm rates"]
 fn false_alarm_rates() {
-    let white = RecordingOptions {
-        white: 0.002,
-        coloured: 0.0,
-        sensor_lag: 0.0,
-        ..RecordingOptions::default()
-    };
-    let coloured = RecordingOptions {
-        white: 0.0005,
-        coloured: 0.003,
-        rho: 0.95,
-        ..RecordingOptions::default()
-    };
     for (label, case_name, opts) in [
-        ("dc-motor, white noise, 4 s", "nothing", white.clone()),
+        ("dc-motor, white noise, 4 s", "nothing", white_noise()),
         (
             "dc-motor, AR(1) 0.95 noise, 4 s",
             "nothing",
-            coloured.clone(),
+            coloured_noise(),
         ),
         (
             "dc-motor, white + AR(1) 0.9, 50 µs lag, 4 s",
             "nothing",
             RecordingOptions::default(),
         ),
-        ("buck-motor, white noise, 4 s", "buck-nothing", white),
+        (
+            "buck-motor, white noise, 4 s",
+            "buck-nothing",
+            white_noise(),
+        ),
         (
             "buck-motor, AR(1) 0.95 noise, 4 s",
             "buck-nothing",
-            coloured,
+            coloured_noise(),
         ),
     ] {
-        let c = case(case_name);
-        let model = BondModel::new(library::builtin(&c.model).unwrap());
-        let seeds = 1000..1050;
-        let n = seeds.end - seeds.start;
-        let alarms: Vec<(u64, Verdict)> = seeds
-            .filter_map(|seed| {
-                let rec = record(
-                    &c,
-                    &RecordingOptions {
-                        seed,
-                        ..opts.clone()
-                    },
-                )
-                .unwrap();
-                let v = explain(&model, &rec, &ExplainOptions::default())
-                    .unwrap()
-                    .verdict;
-                (v != Verdict::NothingMissing).then_some((seed, v))
-            })
-            .collect();
+        let alarms = false_alarms(case_name, &opts, 1000..1050);
         println!(
-            "{label}: {} false alarms in {n} seeds {alarms:?}",
+            "{label}: {} false alarms in 50 seeds {alarms:?}",
             alarms.len()
         );
     }

@@ -65,34 +65,30 @@ pub fn parse_number(text: &str) -> Result<f64, String> {
     }
 }
 
-/// Parses a finite number > 0 (clap puts the option's name in front of the message).
-pub fn parse_positive(text: &str) -> Result<f64, String> {
+/// Parses a finite number > 0 in `unit` (the error names the unit; clap puts the option's
+/// name in front of it).
+fn parse_positive_in(text: &str, unit: &str) -> Result<f64, String> {
     let v = parse_number(text)?;
     if v > 0.0 {
         Ok(v)
     } else {
-        Err(format!("must be positive, found {v}"))
+        Err(format!("must be positive, found {v}{unit}"))
     }
+}
+
+/// Parses a finite number > 0.
+pub fn parse_positive(text: &str) -> Result<f64, String> {
+    parse_positive_in(text, "")
 }
 
 /// Parses a duration in seconds > 0.
 pub fn parse_seconds(text: &str) -> Result<f64, String> {
-    let v = parse_number(text)?;
-    if v > 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("must be positive, found {v} s"))
-    }
+    parse_positive_in(text, " s")
 }
 
 /// Parses a rate in Hz > 0.
 pub fn parse_hertz(text: &str) -> Result<f64, String> {
-    let v = parse_number(text)?;
-    if v > 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("must be positive, found {v} Hz"))
-    }
+    parse_positive_in(text, " Hz")
 }
 
 /// Parses a whole number ≥ 1 (a count); a negative or fractional number is named as such.

@@ -874,24 +874,26 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
     let summary = |after_weighted: &[f64], judged: Vec<Judgement>| {
         output_summaries(&target, &rms_before, after_weighted, judged)
     };
+    // An interrupted run: no verdict, nothing chosen, only finished fits ranked.
+    let stopped = |why: String, ranking, warnings| Explanation {
+        model: model.name(),
+        verdict: Verdict::Interrupted,
+        outputs: summary(&base_weighted, judged_before.clone()),
+        ranked: ranking,
+        chosen: Vec::new(),
+        margin,
+        effective_samples: n_eff,
+        cost_before,
+        warnings,
+        reasons: vec![why],
+    };
     if interrupted {
-        let reasons = vec![format!(
+        let why = format!(
             "interrupted after {} of {total} candidate fits: no verdict (the ranking holds \
              only the fits that finished)",
             fitted.len()
-        )];
-        return Ok(Explanation {
-            model: model.name(),
-            verdict: Verdict::Interrupted,
-            outputs: summary(&base_weighted, judged_before),
-            ranked: ranking,
-            chosen: Vec::new(),
-            margin,
-            effective_samples: n_eff,
-            cost_before,
-            warnings,
-            reasons,
-        });
+        );
+        return Ok(stopped(why, ranking, warnings));
     }
 
     let mut chosen: Vec<RankedCandidate> = Vec::new();
@@ -929,22 +931,9 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         if !all_at_floor(&judged_after, opts.floor_factor) && opts.max_effects >= 2 {
             let second = second_effect(&target, opts, &candidates, &fitted, best, &base_weighted);
             if cancelled() {
-                let reasons = vec![
-                    "interrupted while fitting a second effect on top of the first: no verdict"
-                        .to_string(),
-                ];
-                return Ok(Explanation {
-                    model: model.name(),
-                    verdict: Verdict::Interrupted,
-                    outputs: summary(&base_weighted, judged_before),
-                    ranked: ranking,
-                    chosen: Vec::new(),
-                    margin,
-                    effective_samples: n_eff,
-                    cost_before,
-                    warnings,
-                    reasons,
-                });
+                let why = "interrupted while fitting a second effect on top of the first: no \
+                           verdict";
+                return Ok(stopped(why.to_string(), ranking, warnings));
             }
             if let Some((pair, weighted)) = second {
                 chosen = pair;
