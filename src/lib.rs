@@ -52,6 +52,10 @@ pub use modelgap_core::{
 };
 
 pub use modelgap_bond::BondError;
+pub use modelgap_cloth::ClothError;
+
+pub mod load;
+pub use load::{LoadOptions, load_model, load_recording};
 
 /// Everything that can go wrong in modelgap, whichever crate it comes from.
 ///
@@ -65,6 +69,24 @@ pub enum Error {
     /// An error of `modelgap-bond`: models, causality, equations, simulation, diagnosis.
     #[error(transparent)]
     Bond(#[from] BondError),
+    /// An error of `modelgap-cloth`: meshes, scenes, markers, the solver.
+    #[error(transparent)]
+    Cloth(#[from] ClothError),
+    /// A request that does not fit: a model or recording that is not there, an option the
+    /// model's kind does not take ([`load`]).
+    #[error("{0}")]
+    Input(String),
+    /// A parameter (or input default) that could not be set as asked ([`LoadOptions::set`]).
+    #[error("setting {name} = {value}")]
+    Set {
+        /// The parameter or input.
+        name: String,
+        /// The value asked for.
+        value: f64,
+        /// Why not (an unknown name, an unphysical or too large value).
+        #[source]
+        source: Box<BondError>,
+    },
 }
 
 /// `Result` with [`Error`] as the error type.

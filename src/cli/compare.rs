@@ -1,14 +1,12 @@
 //! `modelgap compare`: hold a model against a recording and show where it fails — the error
-//! per measured output, its noise floor, the band and the windows where the residual
-//! leaves it — as text, JSON or a report.
+//! per measured output (per marker and region for a cloth scene), its noise floor, the band
+//! and the windows where the residual leaves it — as text, JSON or a report.
 
 use clap::Args;
-use modelgap::story::comparison_text;
 use serde_json::json;
 
 use super::report::{
-    LoopArgs, ReportParts, args_text, comparison_json, data_name, json_text, load_loop,
-    print_notes, report_line, run_compare, write_report,
+    LoopArgs, ReportParts, args_text, data_name, json_text, load_loop, print_notes, report_line,
 };
 
 /// Arguments of `modelgap compare`.
@@ -18,7 +16,8 @@ pub struct CompareArgs {
     pub common: LoopArgs,
 
     /// Print the comparison as JSON: per output its RMS, normalised RMS, largest error, noise
-    /// floor, band, failure windows and effective samples
+    /// floor, band, failure windows and effective samples (a cloth scene: per marker and
+    /// region)
     #[arg(long)]
     pub json: bool,
 }
@@ -30,15 +29,13 @@ pub struct CompareArgs {
 /// Model and recording errors (see [`super::report::load_loop`]), a model that cannot
 /// simulate the recording, a report that cannot be written.
 pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
-    if let Some(scene) = super::cloth_loop::scene_file(&args.common) {
-        return super::cloth_loop::compare_command(args, &scene);
-    }
     let loaded = load_loop(&args.common)?;
-    let before = run_compare(&loaded.model, &loaded)?;
+    let before = loaded.compare(loaded.model.as_ref())?;
+    let story = loaded.story();
     let page = match &args.common.report {
-        Some(dir) => Some(write_report(
+        Some(dir) => Some(loaded.write_report(
             dir,
-            ReportParts {
+            &ReportParts {
                 before: &before,
                 explanation: None,
                 after: None,
@@ -49,7 +46,7 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
         None => None,
     };
     if args.json {
-        let mut value = comparison_json(&before);
+        let mut value = story.comparison_json(&before);
         value["data"] = json!(args.common.data.display().to_string());
         value["notes"] = json!(loaded.notes);
         if let Some(page) = &page {
@@ -58,15 +55,11 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
         return super::print(&json_text(&value)?);
     }
     print_notes(&loaded.notes);
-    let mut out = comparison_text(&before);
+    let mut out = story.comparison_text(&before);
     if let Some(page) = &page {
         out.push_str(&report_line(page));
     }
-    if before
-        .outputs
-        .iter()
-        .any(|o| o.finding.is_none() && !o.windows.is_empty())
-    {
+    if story.fails(&before) {
         out.push_str(&format!(
             "next: `modelgap explain {}` names the effect that is missing\n",
             args_text(&args.common)

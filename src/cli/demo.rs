@@ -22,28 +22,18 @@ use clap::Args;
 use modelgap::bond::hidden::{Hidden, HiddenCase};
 use modelgap::bond::table7::{Table7Options, table7, table7_text};
 use modelgap::bond::{BondModel, library};
-use modelgap::report::format_number as num;
-use modelgap::story::{comparison_text, explanation_text};
-use modelgap::{Effect, Model as _, RankedCandidate, Recording};
-
 use modelgap::cloth::hidden::{
     HiddenCase as ClothCase, RecordingOptions, SWING_AMPLITUDE, SWING_FREQUENCY,
     cases as cloth_cases,
 };
 use modelgap::cloth::markers::read_markers_csv;
-use modelgap::cloth::report::{
-    before_after_text as cloth_before_after_text, comparison_text as cloth_comparison_text,
-    explanation_text as cloth_explanation_text,
-};
+use modelgap::cloth::model::{ClothModel, markers_to_recording};
 use modelgap::cloth::scenes::Scene;
+use modelgap::report::format_number as num;
+use modelgap::{RankedCandidate, Recording};
 
-use super::cloth_loop::{
-    ClothLoaded, ClothReport, with_effects, write_report as write_cloth_report,
-};
-use super::report::{
-    Loaded, ReportParts, before_after_text, report_line, run_compare, run_explain,
-    run_explain_model, stop_if_interrupted, write_report,
-};
+use super::explain::before_after;
+use super::report::{Loaded, ReportParts, report_line, stop_if_interrupted};
 
 /// The bundled recording, as CSV text.
 const DEMO_CSV: &str = include_str!("../../examples/data/motor_hidden_effect.csv");
@@ -134,16 +124,9 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     let rec = demo_recording()?;
     let case = demo_case();
     let model = BondModel::new(library::builtin(&case.model)?);
-    let loaded = Loaded {
-        model,
-        model_file: None,
-        rec,
-        noise: Default::default(),
-        notes: Vec::new(),
-        band_sigmas: modelgap::CompareOptions::default().band_sigmas,
-        band_fraction: None,
-    };
+    let loaded = Loaded::new(Box::new(model), rec, DEMO_PATH)?;
     let rec = &loaded.rec;
+    let story = loaded.story();
 
     let mut out = String::from(
         "modelgap demo: hold a motor model against a recording, find the physical effect it is\n\
@@ -170,55 +153,54 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     ));
 
     // 2. Where the model fails.
-    let before = run_compare(&loaded.model, &loaded)?;
+    let before = loaded.compare(loaded.model.as_ref())?;
     out.push_str("2. Where the model fails (the residual leaves its band of 4 noise σ):\n\n");
-    out.push_str(&indent(&comparison_text(&before)));
+    out.push_str(&indent(&story.comparison_text(&before)));
 
     // 3. What is missing.
     super::print(&out)?;
     out.clear();
-    let ex = run_explain(&loaded, false)?;
-    stop_if_interrupted(&ex, false, TOP)?;
+    let ex = loaded.explain(false)?;
+    stop_if_interrupted(story, &ex, false, TOP)?;
     out.push_str(&format!(
         "\n3. What is missing: {} candidate effects (parameters that are off, elements the model lacks,\n   \
          abrupt changes) fitted to the recording and ranked by evidence:\n\n",
         ex.ranked.len()
     ));
-    out.push_str(&indent(&explanation_text(&ex, TOP)));
+    out.push_str(&indent(&story.explanation_text(&ex, TOP)));
 
     // 4. The effect added.
-    let effects: Vec<Effect> = ex.effects();
-    let after = if effects.is_empty() {
-        out.push_str("\n4. Nothing to add: the model already leaves only what noise leaves.\n");
-        None
-    } else {
-        let fixed = loaded.model.with_effects(&effects)?;
-        let after = run_compare(fixed.as_ref(), &loaded)?;
-        out.push_str("\n4. With the effect added to the model:\n\n");
-        for r in &ex.chosen {
-            out.push_str(&format!("   added: {}\n", super::fix::effect_line(r)));
+    let (_, after) = before_after(&loaded, &ex)?;
+    match &after {
+        None => {
+            out.push_str("\n4. Nothing to add: the model already leaves only what noise leaves.\n")
         }
-        out.push_str("   error before → after:\n");
-        out.push_str(&indent(&before_after_text(&before, &after)));
-        let hidden = case
-            .hidden
-            .iter()
-            .map(|h| (h.id.as_str(), h.values.as_slice()));
-        out.push_str(&truth_text(
-            hidden,
-            &ex.chosen,
-            "examples/make_demo_data.rs",
-        ));
-        Some(after)
-    };
+        Some((_, after)) => {
+            out.push_str("\n4. With the effect added to the model:\n\n");
+            for r in &ex.chosen {
+                out.push_str(&format!("   added: {}\n", super::fix::effect_line(r)));
+            }
+            out.push_str("   error before → after:\n");
+            out.push_str(&indent(&story.before_after_text(&before, after)));
+            let hidden = case
+                .hidden
+                .iter()
+                .map(|h| (h.id.as_str(), h.values.as_slice()));
+            out.push_str(&truth_text(
+                hidden,
+                &ex.chosen,
+                "examples/make_demo_data.rs",
+            ));
+        }
+    }
 
     // 5. The report.
-    let page = write_report(
+    let page = loaded.write_report(
         &args.report,
-        ReportParts {
+        &ReportParts {
             before: &before,
             explanation: Some(&ex),
-            after: after.as_ref(),
+            after: after.as_ref().map(|(e, c)| (e.as_slice(), c)),
             data: "motor_hidden_effect.csv",
             verdict: None,
         },
@@ -256,17 +238,19 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     super::print(&out)
 }
 
-/// The bundled cloth scene and markers, loaded.
+/// The bundled cloth scene and markers, loaded: the scene as a model and the markers as its
+/// recording.
 ///
 /// # Errors
 ///
 /// The embedded files do not read (a build with a broken data file).
-pub fn cloth_demo_loaded() -> anyhow::Result<ClothLoaded> {
+pub fn cloth_demo_loaded() -> anyhow::Result<Loaded> {
     let scene = Scene::from_toml(CLOTH_SCENE, CLOTH_SCENE_PATH)
         .with_context(|| format!("reading the bundled scene {CLOTH_SCENE_PATH}"))?;
     let markers = read_markers_csv(CLOTH_CSV.as_bytes())
         .with_context(|| format!("reading the bundled markers {CLOTH_CSV_PATH}"))?;
-    ClothLoaded::new(scene, markers, CLOTH_CSV_PATH)
+    let rec = markers_to_recording(&markers)?;
+    Loaded::new(Box::new(ClothModel::new(scene)), rec, CLOTH_CSV_PATH)
 }
 
 /// Part 6: the loop on the bundled cloth recording; writes the cloth report into `dir`.
@@ -277,8 +261,10 @@ pub fn cloth_demo_loaded() -> anyhow::Result<ClothLoaded> {
 fn cloth_story(dir: &Path) -> anyhow::Result<()> {
     let loaded = cloth_demo_loaded()?;
     let case = cloth_demo_case()?;
-    let scene = loaded.scene();
+    let scene = &case.scene;
+    let story = loaded.story();
     let width = scene.cloth.spacing * (scene.cloth.nx - 1) as f64;
+    let n_markers = loaded.rec.signals().len() / 3;
     let mut out = format!(
         "\n6. The same loop on cloth. The scene ({CLOTH_SCENE_PATH}, bundled) is a {} × {} cloth,\n   \
          {} m wide, hanging from clips on every other vertex of its top row, which swing {} m\n   \
@@ -291,39 +277,35 @@ fn cloth_story(dir: &Path) -> anyhow::Result<()> {
         num(width),
         num(SWING_AMPLITUDE),
         num(SWING_FREQUENCY),
-        loaded.markers.n_markers(),
+        n_markers,
         num(loaded.rec.duration()),
         num((loaded.rec.len() - 1) as f64 / loaded.rec.duration()),
         num(RecordingOptions::default().noise * 1e3),
     );
-    let (before, cloth_before) = loaded.compare(&loaded.model)?;
-    out.push_str(&indent(&cloth_comparison_text(&cloth_before, 5)));
+    let before = loaded.compare(loaded.model.as_ref())?;
+    out.push_str(&indent(&story.comparison_text(&before)));
     super::print(&out)?;
     out.clear();
 
-    let ex = run_explain_model(&loaded.model, &loaded.rec, &loaded.noise, false)?;
-    stop_if_interrupted(&ex, false, TOP)?;
+    let ex = loaded.explain(false)?;
+    stop_if_interrupted(story, &ex, false, TOP)?;
     out.push_str(&format!(
         "\n   What is missing: {} candidate effects fitted to the markers and ranked by evidence:\n\n",
         ex.ranked.len()
     ));
-    out.push_str(&indent(&cloth_explanation_text(&ex, TOP)));
-    let effects: Vec<Effect> = ex.effects();
-    let after = with_effects(&loaded, &effects)?;
+    out.push_str(&indent(&story.explanation_text(&ex, TOP)));
+    let (_, after) = before_after(&loaded, &ex)?;
     match &after {
         None => {
             out.push_str("\n   Nothing to add: the scene already leaves only what noise leaves.\n")
         }
-        Some((_, cloth_after)) => {
+        Some((_, after)) => {
             out.push_str("\n   With the effect added to the scene:\n");
             for r in &ex.chosen {
                 out.push_str(&format!("   added: {}\n", super::fix::effect_line(r)));
             }
             out.push_str("   error before → after:\n");
-            out.push_str(&indent(&cloth_before_after_text(
-                &cloth_before,
-                cloth_after,
-            )));
+            out.push_str(&indent(&story.before_after_text(&before, after)));
             let hidden = case
                 .hidden
                 .iter()
@@ -335,13 +317,12 @@ fn cloth_story(dir: &Path) -> anyhow::Result<()> {
             ));
         }
     }
-    let page = write_cloth_report(
+    let page = loaded.write_report(
         dir,
-        &loaded,
-        ClothReport {
-            before: (&before, &cloth_before),
+        &ReportParts {
+            before: &before,
             explanation: Some(&ex),
-            after: after.as_ref().map(|(c, cc)| (effects.as_slice(), c, cc)),
+            after: after.as_ref().map(|(e, c)| (e.as_slice(), c)),
             data: "cloth_hidden_effect.csv",
             verdict: None,
         },

@@ -1,18 +1,16 @@
 //! `modelgap explain`: which physical effect is the model missing? Fits every candidate
 //! effect the model offers against the recording, ranks them by evidence and gives the
-//! verdict — nothing missing, one effect, two on top of each other, or a partial
-//! explanation — as text, JSON or a report.
+//! verdict — nothing missing, one effect, two on top of each other, a partial explanation,
+//! not explained, cannot judge — as text, JSON or a report.
 
 use clap::Args;
-use modelgap::Model as _;
-use modelgap::story::explanation_text;
-use modelgap::{Comparison, Explanation, Verdict};
+use modelgap::{Comparison, Effect, Explanation, Verdict};
 use serde_json::json;
 
 use super::model::parse_whole;
 use super::report::{
-    Loaded, LoopArgs, ReportParts, args_text, data_name, explanation_json, json_text, load_loop,
-    print_notes, report_line, run_compare, run_explain, stop_if_interrupted, write_report,
+    Loaded, LoopArgs, ReportParts, args_text, data_name, json_text, load_loop, print_notes,
+    report_line, stop_if_interrupted,
 };
 
 /// Arguments of `modelgap explain`.
@@ -39,24 +37,22 @@ pub struct ExplainArgs {
 /// Model and recording errors (see [`super::report::load_loop`]), a model that cannot
 /// simulate the recording, a report that cannot be written.
 pub fn run(args: &ExplainArgs) -> anyhow::Result<()> {
-    if let Some(scene) = super::cloth_loop::scene_file(&args.common) {
-        return super::cloth_loop::explain_command(args, &scene);
-    }
     let loaded = load_loop(&args.common)?;
     if !args.json {
         print_notes(&loaded.notes);
     }
-    let ex = run_explain(&loaded, args.json)?;
-    stop_if_interrupted(&ex, args.json, args.top)?;
+    let story = loaded.story();
+    let ex = loaded.explain(args.json)?;
+    stop_if_interrupted(story, &ex, args.json, args.top)?;
     let page = match &args.common.report {
         Some(dir) => {
             let (before, after) = before_after(&loaded, &ex)?;
-            Some(write_report(
+            Some(loaded.write_report(
                 dir,
-                ReportParts {
+                &ReportParts {
                     before: &before,
                     explanation: Some(&ex),
-                    after: after.as_ref(),
+                    after: after.as_ref().map(|(e, c)| (e.as_slice(), c)),
                     data: &data_name(&args.common.data),
                     verdict: None,
                 },
@@ -65,7 +61,7 @@ pub fn run(args: &ExplainArgs) -> anyhow::Result<()> {
         None => None,
     };
     if args.json {
-        let mut value = explanation_json(&ex);
+        let mut value = story.explanation_json(&ex);
         value["data"] = json!(args.common.data.display().to_string());
         value["notes"] = json!(loaded.notes);
         if let Some(page) = &page {
@@ -79,7 +75,7 @@ pub fn run(args: &ExplainArgs) -> anyhow::Result<()> {
         args.common.data.display(),
         ex.ranked.len()
     );
-    out.push_str(&explanation_text(&ex, args.top));
+    out.push_str(&story.explanation_text(&ex, args.top));
     if let Some(page) = &page {
         out.push_str(&report_line(page));
     }
@@ -88,16 +84,21 @@ pub fn run(args: &ExplainArgs) -> anyhow::Result<()> {
         Verdict::EffectFound | Verdict::TwoEffects | Verdict::Partial
     ) {
         out.push_str(&format!(
-            "next: `modelgap fix {} --out {}-fixed.toml` adds it to the model and shows the error fall\n",
+            "next: `modelgap fix {} --out {}-fixed.{}` adds it to the model and shows the error \
+             fall\n",
             args_text(&args.common),
-            ex.model
+            ex.model,
+            loaded.model.file_extension()
         ));
     }
     super::print(&out)
 }
 
-/// The comparison of the model as given and, when effects were chosen, of the model with
-/// them built in.
+/// The effects added to a model and its comparison with them built in.
+pub type After = (Vec<Effect>, Comparison);
+
+/// The comparison of the model as given and, when effects were chosen, the effects and the
+/// comparison of the model with them built in.
 ///
 /// # Errors
 ///
@@ -105,13 +106,13 @@ pub fn run(args: &ExplainArgs) -> anyhow::Result<()> {
 pub fn before_after(
     loaded: &Loaded,
     ex: &Explanation,
-) -> anyhow::Result<(Comparison, Option<Comparison>)> {
-    let before = run_compare(&loaded.model, loaded)?;
+) -> anyhow::Result<(Comparison, Option<After>)> {
+    let before = loaded.compare(loaded.model.as_ref())?;
     let effects = ex.effects();
     if effects.is_empty() {
         return Ok((before, None));
     }
     let fixed = loaded.model.with_effects(&effects)?;
-    let after = run_compare(fixed.as_ref(), loaded)?;
-    Ok((before, Some(after)))
+    let after = loaded.compare(fixed.as_ref())?;
+    Ok((before, Some((effects, after))))
 }

@@ -7,15 +7,14 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 use clap::Args;
-use modelgap::bond::file::read_model;
-use modelgap::story::{explanation_text, verdict_sentence};
-use modelgap::{Effect, EffectKind, Explanation, Model as _, RankedCandidate, Verdict};
+use modelgap::story::verdict_sentence;
+use modelgap::{Effect, EffectKind, Explanation, RankedCandidate, Verdict};
 
 use super::BadInput;
 use super::model::parse_whole;
 use super::report::{
-    LoopArgs, ReportParts, args_text_with_model, before_after_text, data_name, load_loop,
-    print_notes, report_line, run_compare, run_explain, stop_if_interrupted, write_report,
+    LoopArgs, ReportParts, args_text_with_model, data_name, load_loop, print_notes, report_line,
+    stop_if_interrupted,
 };
 
 /// Arguments of `modelgap fix`.
@@ -105,22 +104,20 @@ impl Pick {
 /// `--out` that is the input model; a model that cannot simulate the recording or take the
 /// effect; a file that cannot be written.
 pub fn run(args: &FixArgs) -> anyhow::Result<()> {
-    if let Some(scene) = super::cloth_loop::scene_file(&args.common) {
-        return super::cloth_loop::fix_command(args, &scene);
-    }
     let loaded = load_loop(&args.common)?;
     check_out(&args.out, loaded.model_file.as_deref())?;
-    let pick = checked_pick(args.effect.as_deref(), &loaded.model, "model")?;
+    let pick = checked_pick(args.effect.as_deref(), loaded.model.as_ref(), "model")?;
     print_notes(&loaded.notes);
-    let ex = run_explain(&loaded, false)?;
-    stop_if_interrupted(&ex, false, args.top)?;
+    let story = loaded.story();
+    let ex = loaded.explain(false)?;
+    stop_if_interrupted(story, &ex, false, args.top)?;
     let mut out = format!(
         "model {} explaining {} ({} candidate effects fitted)\n",
         ex.model,
         args.common.data.display(),
         ex.ranked.len()
     );
-    out.push_str(&explanation_text(&ex, args.top));
+    out.push_str(&story.explanation_text(&ex, args.top));
 
     let Some(Addition {
         added,
@@ -141,15 +138,8 @@ pub fn run(args: &FixArgs) -> anyhow::Result<()> {
             loaded.model.name()
         ))
     })?;
-    read_model(&text).with_context(|| {
-        format!(
-            "the model for {} does not read back (a bug; please report it)",
-            args.out.display()
-        )
-    })?;
     super::interrupt::check("the new model was not written")?;
-    modelgap::io::atomic::write_atomic(&args.out, text.as_bytes())
-        .with_context(|| format!("writing the new model to {}", args.out.display()))?;
+    write_checked(&args.out, &text)?;
 
     out.push('\n');
     for r in &added {
@@ -162,17 +152,17 @@ pub fn run(args: &FixArgs) -> anyhow::Result<()> {
         }
     }
     out.push_str(&format!("wrote {}\n", args.out.display()));
-    let before = run_compare(&loaded.model, &loaded)?;
-    let after = run_compare(fixed.as_ref(), &loaded)?;
+    let before = loaded.compare(loaded.model.as_ref())?;
+    let after = loaded.compare(fixed.as_ref())?;
     out.push_str("error before → after:\n");
-    out.push_str(&before_after_text(&before, &after));
+    out.push_str(&story.before_after_text(&before, &after));
     if let Some(dir) = &args.common.report {
-        let page = write_report(
+        let page = loaded.write_report(
             dir,
-            ReportParts {
+            &ReportParts {
                 before: &before,
                 explanation: Some(&shown),
-                after: Some(&after),
+                after: Some((&effects, &after)),
                 data: &data_name(&args.common.data),
                 verdict: verdict_override,
             },
@@ -184,6 +174,30 @@ pub fn run(args: &FixArgs) -> anyhow::Result<()> {
         args_text_with_model(&args.common, Some(&args.out))
     ));
     super::print(&out)
+}
+
+/// Writes the new model file atomically, after checking that it reads back as a model
+/// (under its temporary name, so a file that does not read never replaces anything).
+///
+/// # Errors
+///
+/// The file cannot be written; it does not read back (a bug).
+fn write_checked(out: &Path, text: &str) -> anyhow::Result<()> {
+    use std::io::Write as _;
+    let mut file = modelgap::io::atomic::AtomicFile::create(out)
+        .with_context(|| format!("writing the new model to {}", out.display()))?;
+    file.write_all(text.as_bytes())
+        .and_then(|()| file.flush())
+        .with_context(|| format!("writing the new model to {}", out.display()))?;
+    let written = file.temporary().to_string_lossy().into_owned();
+    modelgap::load_model(&written, &modelgap::LoadOptions::default()).with_context(|| {
+        format!(
+            "the model for {} does not read back (a bug; please report it)",
+            out.display()
+        )
+    })?;
+    file.commit()
+        .with_context(|| format!("writing the new model to {}", out.display()))
 }
 
 /// The candidate `--effect` names, with its rank from 1.

@@ -1,7 +1,9 @@
 //! What `compare`, `explain`, `fix` and `demo` share: the loop's arguments (model,
 //! recording, start, input hold, noise floors, report directory), loading them with errors
-//! that name the file, running explain behind a progress bar, writing the report, and the
-//! JSON shapes of a comparison and an explanation.
+//! that name the file ([`modelgap::load_model`], [`modelgap::load_recording`]), running
+//! explain behind a progress bar, and writing the report. Every model kind goes the same
+//! way: what differs between a bond graph and a cloth scene is the model's
+//! [`Story`] (how its results read), not this module.
 //!
 //! Ctrl-C stops explain between candidate fits ([`super::interrupt`]): the run ends with
 //! the verdict `interrupted`, only the fits that finished ranked, nothing written, exit
@@ -16,22 +18,17 @@ use std::time::Duration;
 use anyhow::Context as _;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use modelgap::bond::BondModel;
-use modelgap::bond::model::Start;
-use modelgap::bond::simulate::Hold;
-use modelgap::report::format_number as num;
-use modelgap::story::{build_report, write_report_dir};
+use modelgap::load::Hold;
+pub use modelgap::story::ReportParts;
+use modelgap::story::Story;
 use modelgap::{
-    CompareOptions, Comparison, ExplainOptions, Explanation, Model, RankedCandidate, Recording,
-    compare, explain,
+    CompareOptions, Comparison, ExplainOptions, Explanation, LoadOptions, Model, Recording,
+    compare, explain, load_model, load_recording,
 };
-use serde_json::{Map, Value, json};
+use serde_json::Value;
 
 use super::BadInput;
-use super::model::{
-    Assignment, ModelArgs, check_report_dir, load, parse_assignment, parse_positive,
-    read_recording_arg,
-};
+use super::model::{Assignment, ModelArgs, check_report_dir, parse_assignment, parse_positive};
 
 /// The arguments every loop command takes: the model, the recording and how to hold one
 /// against the other.
@@ -112,10 +109,11 @@ pub fn parse_noise_floor(text: &str) -> Result<Assignment, String> {
     }
 }
 
-/// The model and the recording of a loop command, loaded and checked against each other.
+/// The model and the recording of a loop command, loaded and checked against each other:
+/// any kind of model ([`modelgap::load_model`]).
 pub struct Loaded {
     /// The model, with its start and input hold.
-    pub model: BondModel,
+    pub model: Box<dyn Model>,
     /// The model file, when `--model` named one (not a built-in).
     pub model_file: Option<PathBuf>,
     /// The recording.
@@ -131,6 +129,25 @@ pub struct Loaded {
 }
 
 impl Loaded {
+    /// A model and a recording with the default options (the demo), checked against each
+    /// other; `label` names the recording in messages.
+    ///
+    /// # Errors
+    ///
+    /// [`BadInput`] for a recording that measures none of the model's outputs.
+    pub fn new(model: Box<dyn Model>, rec: Recording, label: &str) -> anyhow::Result<Loaded> {
+        let notes = check_fit(model.as_ref(), &rec, &BTreeMap::new(), label)?;
+        Ok(Loaded {
+            model,
+            model_file: None,
+            rec,
+            noise: BTreeMap::new(),
+            notes,
+            band_sigmas: CompareOptions::default().band_sigmas,
+            band_fraction: None,
+        })
+    }
+
     /// Compare options with the user's noise floors.
     pub fn compare_options(&self) -> CompareOptions {
         CompareOptions {
@@ -139,6 +156,44 @@ impl Loaded {
             band_fraction: self.band_fraction,
             ..CompareOptions::default()
         }
+    }
+
+    /// How the results read for this model.
+    pub fn story(&self) -> &dyn Story {
+        self.model.story()
+    }
+
+    /// Compares `model` (the loaded one, or one with effects built in) with the recording.
+    ///
+    /// # Errors
+    ///
+    /// The model cannot simulate the recording.
+    pub fn compare(&self, model: &dyn Model) -> anyhow::Result<Comparison> {
+        compare(model, &self.rec, &self.compare_options())
+            .with_context(|| format!("comparing model {} with the recording", model.name()))
+    }
+
+    /// Runs explain with a progress bar on standard error (hidden when `quiet` or when
+    /// standard error is not a terminal); Ctrl-C stops it between fits.
+    ///
+    /// # Errors
+    ///
+    /// Explain's errors (the model cannot simulate the recording at all).
+    pub fn explain(&self, quiet: bool) -> anyhow::Result<Explanation> {
+        run_explain(self.model.as_ref(), &self.rec, &self.noise, quiet)
+    }
+
+    /// Writes the report into `dir` the way the model's story writes it, and returns the
+    /// page's path; nothing is written after Ctrl-C.
+    ///
+    /// # Errors
+    ///
+    /// [`super::interrupt::Interrupted`]; the directory or a file cannot be written.
+    pub fn write_report(&self, dir: &Path, parts: &ReportParts<'_>) -> anyhow::Result<PathBuf> {
+        super::interrupt::check("the report was not written")?;
+        self.story()
+            .write_report(dir, &self.rec, parts)
+            .with_context(|| format!("writing the report into {}", dir.display()))
     }
 }
 
@@ -150,7 +205,21 @@ impl Loaded {
 /// measures none of the model's outputs (naming both sides) and a `--noise` for an output
 /// the model does not predict; model and recording read errors, with the file in the context.
 pub fn load_loop(args: &LoopArgs) -> anyhow::Result<Loaded> {
-    let graph = load(&args.model)?;
+    let opts = LoadOptions {
+        set: args
+            .model
+            .set
+            .iter()
+            .map(|a| (a.name.clone(), a.value))
+            .collect(),
+        steady_start: args.steady_start,
+        hold: args.hold.into(),
+    };
+    let model = load_model(&args.model.model, &opts).map_err(|e| match e {
+        // "setting L = 0" says which --set already.
+        modelgap::Error::Set { .. } => anyhow::Error::new(e),
+        _ => anyhow::Error::new(e).context(format!("loading model {}", args.model.model)),
+    })?;
     let model_file = Path::new(&args.model.model)
         .is_file()
         .then(|| PathBuf::from(&args.model.model));
@@ -158,33 +227,24 @@ pub fn load_loop(args: &LoopArgs) -> anyhow::Result<Loaded> {
         check_report_dir("--report", dir)?;
     }
     let path = &args.data;
-    let rec = read_recording_arg("--data", "recording", path)?;
-    let start = if args.steady_start {
-        Start::SteadyState
-    } else {
-        Start::Rest
-    };
-    let model = BondModel::new(graph)
-        .with_start(start)
-        .with_hold(args.hold.into());
+    if path.is_dir() {
+        return Err(BadInput(format!(
+            "--data {} is a directory: give a recording file (.csv or .mcap)",
+            path.display()
+        ))
+        .into());
+    }
+    if !path.exists() {
+        return Err(BadInput(format!("--data: recording {} not found", path.display())).into());
+    }
+    let rec = load_recording(path, model.as_ref())
+        .with_context(|| format!("reading recording {}", path.display()))?;
     let noise: BTreeMap<String, f64> = args
         .noise
         .iter()
         .map(|a| (a.name.clone(), a.value))
         .collect();
-    let notes = check_fit(&model, &rec, &noise, path)?;
-    if !(args.band_sigmas.is_finite() && args.band_sigmas > 0.0) {
-        return Err(BadInput(format!(
-            "--band-sigmas must be positive, found {}",
-            args.band_sigmas
-        ))
-        .into());
-    }
-    if let Some(f) = args.band_fraction
-        && !(f.is_finite() && f > 0.0)
-    {
-        return Err(BadInput(format!("--band-fraction must be positive, found {f}")).into());
-    }
+    let notes = check_fit(model.as_ref(), &rec, &noise, &path.display().to_string())?;
     Ok(Loaded {
         model,
         model_file,
@@ -197,26 +257,24 @@ pub fn load_loop(args: &LoopArgs) -> anyhow::Result<Loaded> {
 }
 
 /// Checks that `rec` measures some of the model's outputs and that every given noise floor
-/// names one; returns notes on the model inputs the recording lacks (those whose default is
-/// not 0) and the outputs it does not measure.
+/// names one; returns the model's notes on the recording ([`Model::notes`]).
 ///
 /// # Errors
 ///
-/// [`BadInput`] as described at [`load_loop`].
+/// [`BadInput`] as described at [`load_loop`]; `label` names the recording.
 pub fn check_fit(
-    model: &BondModel,
+    model: &dyn Model,
     rec: &Recording,
     noise: &BTreeMap<String, f64>,
-    path: &Path,
+    label: &str,
 ) -> anyhow::Result<Vec<String>> {
     let outputs = model.outputs();
     if !outputs.iter().any(|o| rec.signal(o).is_some()) {
         return Err(BadInput(format!(
-            "the recording measures none of the outputs of model {} ({}); its signals are {} in {}",
+            "the recording measures none of the outputs of model {} ({}); its signals are {} in {label}",
             model.name(),
-            outputs.join(", "),
-            rec.names().join(", "),
-            path.display()
+            shorten(&outputs),
+            rec.names().join(", ")
         ))
         .into());
     }
@@ -225,42 +283,33 @@ pub fn check_fit(
             return Err(BadInput(format!(
                 "--noise {name}=…: model {} has no output `{name}` (its outputs: {})",
                 model.name(),
-                outputs.join(", ")
+                shorten(&outputs)
             ))
             .into());
         }
         if rec.signal(name).is_none() {
             return Err(BadInput(format!(
-                "--noise {name}=…: the recording does not measure `{name}` in {}",
-                path.display()
+                "--noise {name}=…: the recording does not measure `{name}` in {label}"
             ))
             .into());
         }
     }
-    let mut notes = Vec::new();
-    let held: Vec<String> = model
-        .graph()
-        .inputs()
-        .iter()
-        // An input at 0 by default (a load torque) is the usual "not there"; one with
-        // another default (a supply voltage) is worth a word.
-        .filter(|(name, input)| rec.signal(name).is_none() && input.default != 0.0)
-        .map(|(name, input)| format!("{name} = {} {}", num(input.default), input.unit))
-        .collect();
-    if !held.is_empty() {
-        notes.push(format!(
-            "model inputs the recording lacks are held at their defaults: {}",
-            held.join(", ")
-        ));
+    Ok(model.notes(rec))
+}
+
+/// Names as `a, b, c`, the first and last few when there are many (a cloth's thousands of
+/// marker coordinates).
+fn shorten(names: &[String]) -> String {
+    if names.len() <= 12 {
+        names.join(", ")
+    } else {
+        format!(
+            "{}, …, {} ({} in all)",
+            names[..6].join(", "),
+            names[names.len() - 3..].join(", "),
+            names.len()
+        )
     }
-    for name in &outputs {
-        if rec.signal(name).is_none() {
-            notes.push(format!(
-                "the recording does not measure output `{name}`: it is left out"
-            ));
-        }
-    }
-    Ok(notes)
 }
 
 /// The loop arguments as they would be typed again (`--model M --data D ...`), for the
@@ -312,23 +361,14 @@ pub fn print_notes(notes: &[String]) {
     }
 }
 
-/// Runs explain on the loaded model and recording with a progress bar on standard error
-/// (hidden when `quiet` or when standard error is not a terminal).
+/// Runs explain on a model and recording with the noise floors the user gave, behind a
+/// progress bar on standard error (hidden when `quiet` or when standard error is not a
+/// terminal); Ctrl-C stops it between fits.
 ///
 /// # Errors
 ///
 /// Explain's errors (the model cannot simulate the recording at all).
-pub fn run_explain(loaded: &Loaded, quiet: bool) -> anyhow::Result<Explanation> {
-    run_explain_model(&loaded.model, &loaded.rec, &loaded.noise, quiet)
-}
-
-/// Runs explain on any model (a bond graph or a cloth scene) and recording, with the noise
-/// floors the user gave, behind the progress bar of [`run_explain`].
-///
-/// # Errors
-///
-/// Explain's errors (the model cannot simulate the recording at all).
-pub fn run_explain_model(
+pub fn run_explain(
     model: &dyn Model,
     rec: &Recording,
     noise: &BTreeMap<String, f64>,
@@ -377,64 +417,21 @@ pub fn run_explain_model(
 /// # Errors
 ///
 /// [`super::interrupt::Interrupted`] when the run was interrupted; printing errors.
-pub fn stop_if_interrupted(ex: &Explanation, json: bool, top: usize) -> anyhow::Result<()> {
+pub fn stop_if_interrupted(
+    story: &dyn Story,
+    ex: &Explanation,
+    json: bool,
+    top: usize,
+) -> anyhow::Result<()> {
     if ex.verdict != modelgap::Verdict::Interrupted {
         return Ok(());
     }
     if json {
-        super::print(&json_text(&explanation_json(ex))?)?;
+        super::print(&json_text(&story.explanation_json(ex))?)?;
     } else {
-        super::print(&modelgap::story::explanation_text(ex, top))?;
+        super::print(&story.explanation_text(ex, top))?;
     }
     Err(super::interrupt::Interrupted("no verdict; nothing was written".to_owned()).into())
-}
-
-/// Compares a model (the loaded one, or one with effects built in) with the recording.
-///
-/// # Errors
-///
-/// The model cannot simulate the recording.
-pub fn run_compare(model: &dyn Model, loaded: &Loaded) -> anyhow::Result<Comparison> {
-    compare(model, &loaded.rec, &loaded.compare_options())
-        .with_context(|| format!("comparing model {} with the recording", model.name()))
-}
-
-/// What a report shows: the comparisons, the explanation, and the recording's name.
-pub struct ReportParts<'a> {
-    /// The model as given against the recording.
-    pub before: &'a Comparison,
-    /// The explanation, if explain ran.
-    pub explanation: Option<&'a Explanation>,
-    /// The model with the effects added against the recording, if any were added.
-    pub after: Option<&'a Comparison>,
-    /// The recording, as named in the title (its file name).
-    pub data: &'a str,
-    /// A verdict in place of the explanation's (`fix --effect`).
-    pub verdict: Option<String>,
-}
-
-/// Writes `report.html` and `comparison.mcap` into `dir` and returns the page's path.
-///
-/// # Errors
-///
-/// The directory or a file cannot be written.
-pub fn write_report(dir: &Path, parts: ReportParts<'_>) -> anyhow::Result<PathBuf> {
-    let ReportParts {
-        before,
-        explanation,
-        after,
-        data,
-        verdict,
-    } = parts;
-    super::interrupt::check("the report was not written")?;
-    let mut report = build_report(before, explanation, after);
-    report.title = format!("modelgap: {} against {data}", before.model);
-    if let Some(v) = verdict {
-        report.verdict = v;
-    }
-    write_report_dir(dir, &report, before, after)
-        .with_context(|| format!("writing the report into {}", dir.display()))?;
-    Ok(dir.join("report.html"))
 }
 
 /// The file name of a recording, for titles.
@@ -453,198 +450,6 @@ pub fn report_line(page: &Path) -> String {
         page.display(),
         mcap.display()
     )
-}
-
-/// The error before → after per output, as text.
-pub fn before_after_text(before: &Comparison, after: &Comparison) -> String {
-    let mut s = String::new();
-    for o in &before.outputs {
-        let Some(a) = after.output(&o.name) else {
-            continue;
-        };
-        let change = if o.stats.rms > 0.0 {
-            let ratio = a.stats.rms / o.stats.rms;
-            if ratio <= 1.0 {
-                format!("{:.0} % lower", 100.0 * (1.0 - ratio))
-            } else {
-                format!("{:.0} % higher", 100.0 * (ratio - 1.0))
-            }
-        } else {
-            String::from("was already 0")
-        };
-        s.push_str(&format!(
-            "  {:<8} RMS {} → {} {} ({change}; {:.1}× → {:.1}× the noise floor {}), failure windows {} → {}\n",
-            o.name,
-            num(o.stats.rms),
-            num(a.stats.rms),
-            o.unit,
-            o.rms_over_floor(),
-            a.rms_over_floor(),
-            num(o.noise_floor),
-            o.windows.len(),
-            a.windows.len(),
-        ));
-    }
-    s
-}
-
-/// A number for JSON: `null` when not finite (JSON has no NaN or infinity).
-pub fn finite(v: f64) -> Value {
-    if v.is_finite() { json!(v) } else { Value::Null }
-}
-
-/// A comparison as JSON: per output its statistics, noise floor, band and failure windows.
-pub fn comparison_json(c: &Comparison) -> Value {
-    let outputs: Vec<Value> = c
-        .outputs
-        .iter()
-        .map(|o| {
-            let windows: Vec<Value> = o
-                .windows
-                .iter()
-                .map(|w| {
-                    json!({
-                        "start": finite(w.start),
-                        "end": finite(w.end),
-                        "peak": finite(w.peak),
-                        "peak_time": finite(w.peak_time),
-                        "sign": w.sign,
-                    })
-                })
-                .collect();
-            json!({
-                "name": o.name,
-                "unit": o.unit,
-                "rms": finite(o.stats.rms),
-                "nrms": finite(o.stats.nrms),
-                "max_abs": finite(o.stats.max_abs),
-                "mean": finite(o.stats.mean),
-                "noise_floor": finite(o.noise_floor),
-                "noise_given": o.noise_given,
-                "rms_over_floor": finite(o.rms_over_floor()),
-                "band": finite(o.band),
-                "windows": windows,
-                "effective_samples": finite(o.effective_samples),
-                "quantum": o.quantum.map(finite),
-                "not_judged": o.finding,
-            })
-        })
-        .collect();
-    json!({
-        "model": c.model,
-        "samples": c.t.len(),
-        "duration": finite(c.t.last().copied().unwrap_or(0.0) - c.t.first().copied().unwrap_or(0.0)),
-        "outputs": outputs,
-        "warnings": c.warnings,
-    })
-}
-
-/// One ranked (or chosen) candidate as JSON, its RMS after keyed by output name.
-pub fn candidate_json(ex: &Explanation, r: &RankedCandidate) -> Value {
-    let params: Vec<Value> = r
-        .params
-        .iter()
-        .map(|p| {
-            json!({
-                "name": p.name,
-                "unit": p.unit,
-                "value": finite(p.value),
-                "std_error": finite(p.std_error),
-            })
-        })
-        .collect();
-    let rms_after: Map<String, Value> = ex
-        .outputs
-        .iter()
-        .zip(&r.rms_after)
-        .map(|(o, v)| (o.name.clone(), finite(*v)))
-        .collect();
-    json!({
-        "id": r.candidate.id,
-        "name": r.candidate.name,
-        "kind": r.candidate.kind.to_string(),
-        "acts_on": r.candidate.acts_on,
-        "params": params,
-        "rms_after": rms_after,
-        "score": finite(r.score),
-        "qualitative": r.qualitative,
-        "equivalent": r.equivalent,
-        "termination": format!("{:?}", r.termination).to_lowercase(),
-        "error": r.error,
-    })
-}
-
-/// An explanation as JSON: the verdict, per output the floor and RMS before and after, the
-/// ranking, the chosen effects, the margin, the effective sample size and the warnings.
-/// Non-finite numbers (a failed fit's score) are `null`.
-pub fn explanation_json(ex: &Explanation) -> Value {
-    let outputs: Vec<Value> = ex
-        .outputs
-        .iter()
-        .map(|o| {
-            let remaining: Vec<Value> = o
-                .remaining_windows
-                .iter()
-                .map(|w| json!({"start": finite(w.start), "end": finite(w.end), "peak": finite(w.peak)}))
-                .collect();
-            json!({
-                "name": o.name,
-                "unit": o.unit,
-                "noise_floor": finite(o.noise_floor),
-                "rms_before": finite(o.rms_before),
-                "rms_after": finite(o.rms_after),
-                "remaining_windows": remaining,
-                "judgement": o.judgement.as_ref().map(judgement_json),
-            })
-        })
-        .collect();
-    let ranked: Vec<Value> = ex.ranked.iter().map(|r| candidate_json(ex, r)).collect();
-    let chosen: Vec<Value> = ex
-        .chosen
-        .iter()
-        .map(|c| {
-            let mut v = candidate_json(ex, c);
-            // The qualitative check runs on the ranking; a chosen effect carries its result.
-            if c.qualitative.is_none()
-                && let Some(r) = ex.ranked.iter().find(|r| r.candidate.id == c.candidate.id)
-            {
-                v["qualitative"] = json!(r.qualitative);
-            }
-            v
-        })
-        .collect();
-    json!({
-        "model": ex.model,
-        "verdict": ex.verdict.to_string(),
-        "verdict_text": modelgap::story::verdict_sentence(ex),
-        "interrupted": ex.verdict == modelgap::Verdict::Interrupted,
-        "reasons": ex.reasons,
-        "outputs": outputs,
-        "ranked": ranked,
-        "chosen": chosen,
-        "margin": finite(ex.margin),
-        "effective_samples": finite(ex.effective_samples),
-        "warnings": ex.warnings,
-    })
-}
-
-/// The judge's reading of one output's residual as JSON.
-fn judgement_json(j: &modelgap::judge::Judgement) -> Value {
-    json!({
-        "at_floor": j.at_floor,
-        "noise_sigma": finite(j.noise_sigma),
-        "coloured": j.coloured,
-        "correlation_samples": finite(j.correlation_samples),
-        "quantum": j.quantum.map(finite),
-        "windows": j.windows,
-        "bias_z": finite(j.bias_z),
-        "input_correlation": j.input.as_ref().map(|c| json!({
-            "input": c.input,
-            "lag": c.lag,
-            "z": finite(c.z),
-        })),
-        "reasons": j.reasons,
-    })
 }
 
 /// Pretty JSON text with a final newline.
@@ -666,12 +471,5 @@ mod tests {
         assert!(parse_noise_floor("i=0").is_err());
         assert!(parse_noise_floor("i=-1").is_err());
         assert!(parse_noise_floor("i").is_err());
-    }
-
-    #[test]
-    fn non_finite_numbers_become_null() {
-        assert_eq!(finite(f64::NAN), Value::Null);
-        assert_eq!(finite(f64::NEG_INFINITY), Value::Null);
-        assert_eq!(finite(1.5), json!(1.5));
     }
 }

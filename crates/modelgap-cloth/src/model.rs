@@ -696,6 +696,42 @@ impl Model for ClothModel {
         self.scene.name.clone()
     }
 
+    /// Per marker and region ([`crate::report::story`]).
+    fn story(&self) -> &dyn modelgap_core::story::Story {
+        self
+    }
+
+    /// A marker recording (`t,id,x,y,z` CSV or `/markers` MCAP) as signals
+    /// `m{id}.x|y|z`, every id checked against the grid at its own line or message.
+    fn read_recording(&self, path: &Path) -> modelgap_core::Result<Recording> {
+        let n = self
+            .scene
+            .cloth
+            .n_vertices()
+            .map_err(crate::report::story::seam)?;
+        let markers = crate::markers::read_markers_path_within(path, n).map_err(|e| match e {
+            ClothError::Core(core) => core,
+            other => CoreError::Model {
+                message: format!(
+                    "reading markers for scene {} ({} x {} grid): {other}",
+                    self.scene.name, self.scene.cloth.nx, self.scene.cloth.nz
+                ),
+            },
+        })?;
+        markers_to_recording(&markers).map_err(crate::report::story::seam)
+    }
+
+    /// Whether pinned vertices follow the recorded markers; the grid's unmarked vertices
+    /// are not listed (a recording marks a few of them).
+    fn notes(&self, rec: &Recording) -> Vec<String> {
+        let _ = rec;
+        if self.scene.pins_from_markers {
+            vec!["pinned vertices with markers follow the recorded positions".to_owned()]
+        } else {
+            Vec::new()
+        }
+    }
+
     fn outputs(&self) -> Vec<String> {
         let n = (self.scene.cloth.nx * self.scene.cloth.nz) as u32;
         (0..n)

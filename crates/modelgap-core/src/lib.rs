@@ -60,6 +60,7 @@ pub mod error;
 pub mod explain;
 pub mod fit;
 pub mod io;
+pub mod json;
 pub mod judge;
 pub mod math;
 pub mod model;

@@ -127,6 +127,32 @@ pub trait Model: Send + Sync {
         None
     }
 
+    /// How the loop's results read for this model: text, JSON and the report. The default
+    /// reads them output by output ([`crate::story::PerOutput`]).
+    fn story(&self) -> &dyn crate::story::Story {
+        &crate::story::PerOutput
+    }
+
+    /// Reads a recording for this model from a file: by default a signals file (CSV or
+    /// MCAP, [`crate::io::read_recording_path`]); a model whose recordings come in another
+    /// form (a cloth's marker files) reads them its own way, checked against itself.
+    ///
+    /// # Errors
+    /// The reader's errors, naming the file and the line, field or message.
+    fn read_recording(&self, path: &std::path::Path) -> Result<Recording> {
+        crate::io::read_recording_path(path)
+    }
+
+    /// Findings worth telling the user before the loop runs on `rec`: by default the
+    /// outputs the recording does not measure.
+    fn notes(&self, rec: &Recording) -> Vec<String> {
+        self.outputs()
+            .iter()
+            .filter(|o| rec.signal(o).is_none())
+            .map(|o| format!("the recording does not measure output `{o}`: it is left out"))
+            .collect()
+    }
+
     /// Whether a candidate's qualitative signature (fault tree, temporal
     /// signature) agrees with the residuals the model leaves on `rec`;
     /// `None` when the model has no qualitative reasoning for it.

@@ -2,11 +2,13 @@
 //! the error before and after — as terminal text and as the HTML report.
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::compare::Comparison;
+use crate::effect::Effect;
 use crate::error::Result;
 use crate::explain::{Explanation, FittedParam, Verdict};
+use crate::recording::Recording;
 use crate::report::{
     ComparisonChannels, RankingBar, Report, ResidualPlot, SeriesPlot, format_number,
     write_comparison_mcap, write_html,
@@ -70,6 +72,39 @@ pub fn verdict_sentence(ex: &Explanation) -> String {
                 .to_string()
         }
     }
+}
+
+/// The error before → after per output, as text.
+pub fn before_after_text(before: &Comparison, after: &Comparison) -> String {
+    let mut s = String::new();
+    for o in &before.outputs {
+        let Some(a) = after.output(&o.name) else {
+            continue;
+        };
+        let change = if o.stats.rms > 0.0 {
+            let ratio = a.stats.rms / o.stats.rms;
+            if ratio <= 1.0 {
+                format!("{:.0} % lower", 100.0 * (1.0 - ratio))
+            } else {
+                format!("{:.0} % higher", 100.0 * (ratio - 1.0))
+            }
+        } else {
+            String::from("was already 0")
+        };
+        s.push_str(&format!(
+            "  {:<8} RMS {} → {} {} ({change}; {:.1}× → {:.1}× the noise floor {}), failure windows {} → {}\n",
+            o.name,
+            num(o.stats.rms),
+            num(a.stats.rms),
+            o.unit,
+            o.rms_over_floor(),
+            a.rms_over_floor(),
+            num(o.noise_floor),
+            o.windows.len(),
+            a.windows.len(),
+        ));
+    }
+    s
 }
 
 /// Where the model fails, output by output, as text.
@@ -466,3 +501,90 @@ pub fn write_report_dir(
     };
     write_comparison_mcap(&channels, &dir.join("comparison.mcap"))
 }
+
+/// What a report shows: the comparison of the model as given, the explanation (if explain
+/// ran), the effects added and the comparison of the model with them (if any were added),
+/// the recording's name for the title, and a verdict sentence in place of the
+/// explanation's (`fix --effect`).
+pub struct ReportParts<'a> {
+    /// The model as given against the recording.
+    pub before: &'a Comparison,
+    /// The explanation, if explain ran.
+    pub explanation: Option<&'a Explanation>,
+    /// The effects added, and the comparison of the model with them.
+    pub after: Option<(&'a [Effect], &'a Comparison)>,
+    /// The recording, as named in the title (its file name).
+    pub data: &'a str,
+    /// A verdict in place of the explanation's.
+    pub verdict: Option<String>,
+}
+
+/// How the loop's results read for one kind of model: as text, as JSON and as the report.
+/// Every method has the output-by-output reading of this module as its default; a model
+/// whose outputs group (a cloth's marker coordinates, by marker and region) gives its own
+/// through [`Model::story`](crate::Model::story). The command line and Python print through it, so that they
+/// hold no branch per model kind.
+pub trait Story: Send + Sync {
+    /// Where the model fails (see [`comparison_text`]).
+    fn comparison_text(&self, c: &Comparison) -> String {
+        comparison_text(c)
+    }
+
+    /// The comparison as JSON (see [`crate::json::comparison_json`]).
+    fn comparison_json(&self, c: &Comparison) -> serde_json::Value {
+        crate::json::comparison_json(c)
+    }
+
+    /// Whether the comparison shows the model failing somewhere it can be judged (then
+    /// explain has something to name).
+    fn fails(&self, c: &Comparison) -> bool {
+        c.outputs
+            .iter()
+            .any(|o| o.finding.is_none() && !o.windows.is_empty())
+    }
+
+    /// The ranking and the verdict (see [`explanation_text`]).
+    fn explanation_text(&self, ex: &Explanation, top: usize) -> String {
+        explanation_text(ex, top)
+    }
+
+    /// The explanation as JSON (see [`crate::json::explanation_json`]).
+    fn explanation_json(&self, ex: &Explanation) -> serde_json::Value {
+        crate::json::explanation_json(ex)
+    }
+
+    /// The error before → after (see [`before_after_text`]).
+    fn before_after_text(&self, before: &Comparison, after: &Comparison) -> String {
+        before_after_text(before, after)
+    }
+
+    /// Writes the report into `dir` (created if needed) and returns the page's path: by
+    /// default `report.html` ([`build_report`]) and `comparison.mcap` for Foxglove
+    /// ([`write_report_dir`]). `rec` is the recording the comparisons were made on.
+    ///
+    /// # Errors
+    /// I/O errors naming the file; a model that cannot be simulated for the report.
+    fn write_report(
+        &self,
+        dir: &Path,
+        rec: &Recording,
+        parts: &ReportParts<'_>,
+    ) -> Result<PathBuf> {
+        let _ = rec;
+        let after = parts.after.map(|(_, c)| c);
+        let mut report = build_report(parts.before, parts.explanation, after);
+        report.title = format!("modelgap: {} against {}", parts.before.model, parts.data);
+        if let Some(v) = &parts.verdict {
+            report.verdict.clone_from(v);
+        }
+        write_report_dir(dir, &report, parts.before, after)?;
+        Ok(dir.join("report.html"))
+    }
+}
+
+/// The output-by-output reading of the loop's results: the [`Story`] of every model that
+/// does not give its own.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PerOutput;
+
+impl Story for PerOutput {}

@@ -71,6 +71,7 @@ use crate::model::parse_marker_signal;
 
 mod foxglove;
 mod map;
+pub mod story;
 
 pub use foxglove::{
     CLOTH_ERROR_AFTER_TOPIC, CLOTH_ERROR_TOPIC, ErrorMcap, MARKER_ERROR_AFTER_TOPIC,

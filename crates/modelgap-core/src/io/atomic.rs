@@ -61,6 +61,12 @@ impl AtomicFile {
         &self.destination
     }
 
+    /// The name it is written under until [`AtomicFile::commit`] (in the destination's
+    /// folder): to read back what was written before it replaces anything.
+    pub fn temporary(&self) -> &Path {
+        &self.temporary
+    }
+
     /// Flushes the data to disk and renames the file into place.
     ///
     /// # Errors

@@ -1,0 +1,181 @@
+//! The loop's results as JSON, the shapes `modelgap compare|explain|fix --json` print:
+//! a comparison per output, an explanation with its verdict, reasons, each output's
+//! judgement and the ranked candidates. Numbers that are not finite (the score of a fit
+//! that failed) are `null`; JSON has no NaN or infinity.
+
+use serde_json::{Map, Value, json};
+
+use crate::compare::Comparison;
+use crate::explain::{Explanation, RankedCandidate, Verdict};
+use crate::judge::Judgement;
+
+/// A number for JSON: `null` when not finite (JSON has no NaN or infinity).
+pub fn finite(v: f64) -> Value {
+    if v.is_finite() { json!(v) } else { Value::Null }
+}
+
+/// A comparison as JSON: per output its statistics, noise floor, band and failure windows.
+pub fn comparison_json(c: &Comparison) -> Value {
+    let outputs: Vec<Value> = c
+        .outputs
+        .iter()
+        .map(|o| {
+            let windows: Vec<Value> = o
+                .windows
+                .iter()
+                .map(|w| {
+                    json!({
+                        "start": finite(w.start),
+                        "end": finite(w.end),
+                        "peak": finite(w.peak),
+                        "peak_time": finite(w.peak_time),
+                        "sign": w.sign,
+                    })
+                })
+                .collect();
+            json!({
+                "name": o.name,
+                "unit": o.unit,
+                "rms": finite(o.stats.rms),
+                "nrms": finite(o.stats.nrms),
+                "max_abs": finite(o.stats.max_abs),
+                "mean": finite(o.stats.mean),
+                "noise_floor": finite(o.noise_floor),
+                "noise_given": o.noise_given,
+                "rms_over_floor": finite(o.rms_over_floor()),
+                "band": finite(o.band),
+                "windows": windows,
+                "effective_samples": finite(o.effective_samples),
+                "quantum": o.quantum.map(finite),
+                "not_judged": o.finding,
+            })
+        })
+        .collect();
+    json!({
+        "model": c.model,
+        "samples": c.t.len(),
+        "duration": finite(c.t.last().copied().unwrap_or(0.0) - c.t.first().copied().unwrap_or(0.0)),
+        "outputs": outputs,
+        "warnings": c.warnings,
+    })
+}
+
+/// One ranked (or chosen) candidate as JSON, its RMS after keyed by output name.
+pub fn candidate_json(ex: &Explanation, r: &RankedCandidate) -> Value {
+    let params: Vec<Value> = r
+        .params
+        .iter()
+        .map(|p| {
+            json!({
+                "name": p.name,
+                "unit": p.unit,
+                "value": finite(p.value),
+                "std_error": finite(p.std_error),
+            })
+        })
+        .collect();
+    let rms_after: Map<String, Value> = ex
+        .outputs
+        .iter()
+        .zip(&r.rms_after)
+        .map(|(o, v)| (o.name.clone(), finite(*v)))
+        .collect();
+    json!({
+        "id": r.candidate.id,
+        "name": r.candidate.name,
+        "kind": r.candidate.kind.to_string(),
+        "acts_on": r.candidate.acts_on,
+        "params": params,
+        "rms_after": rms_after,
+        "score": finite(r.score),
+        "qualitative": r.qualitative,
+        "equivalent": r.equivalent,
+        "termination": format!("{:?}", r.termination).to_lowercase(),
+        "error": r.error,
+    })
+}
+
+/// The judge's reading of one output's residual as JSON.
+pub fn judgement_json(j: &Judgement) -> Value {
+    json!({
+        "at_floor": j.at_floor,
+        "noise_sigma": finite(j.noise_sigma),
+        "coloured": j.coloured,
+        "correlation_samples": finite(j.correlation_samples),
+        "quantum": j.quantum.map(finite),
+        "windows": j.windows,
+        "bias_z": finite(j.bias_z),
+        "input_correlation": j.input.as_ref().map(|c| json!({
+            "input": c.input,
+            "lag": c.lag,
+            "z": finite(c.z),
+        })),
+        "reasons": j.reasons,
+    })
+}
+
+/// An explanation as JSON: the verdict, per output the floor and RMS before and after, the
+/// ranking, the chosen effects, the margin, the effective sample size and the warnings.
+/// Non-finite numbers (a failed fit's score) are `null`.
+pub fn explanation_json(ex: &Explanation) -> Value {
+    let outputs: Vec<Value> = ex
+        .outputs
+        .iter()
+        .map(|o| {
+            let remaining: Vec<Value> = o
+                .remaining_windows
+                .iter()
+                .map(|w| json!({"start": finite(w.start), "end": finite(w.end), "peak": finite(w.peak)}))
+                .collect();
+            json!({
+                "name": o.name,
+                "unit": o.unit,
+                "noise_floor": finite(o.noise_floor),
+                "rms_before": finite(o.rms_before),
+                "rms_after": finite(o.rms_after),
+                "remaining_windows": remaining,
+                "judgement": o.judgement.as_ref().map(judgement_json),
+            })
+        })
+        .collect();
+    let ranked: Vec<Value> = ex.ranked.iter().map(|r| candidate_json(ex, r)).collect();
+    let chosen: Vec<Value> = ex
+        .chosen
+        .iter()
+        .map(|c| {
+            let mut v = candidate_json(ex, c);
+            // The qualitative check runs on the ranking; a chosen effect carries its result.
+            if c.qualitative.is_none()
+                && let Some(r) = ex.ranked.iter().find(|r| r.candidate.id == c.candidate.id)
+            {
+                v["qualitative"] = json!(r.qualitative);
+            }
+            v
+        })
+        .collect();
+    json!({
+        "model": ex.model,
+        "verdict": ex.verdict.to_string(),
+        "verdict_text": crate::story::verdict_sentence(ex),
+        "interrupted": ex.verdict == Verdict::Interrupted,
+        "reasons": ex.reasons,
+        "outputs": outputs,
+        "ranked": ranked,
+        "chosen": chosen,
+        "margin": finite(ex.margin),
+        "effective_samples": finite(ex.effective_samples),
+        "warnings": ex.warnings,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn non_finite_numbers_become_null() {
+        assert_eq!(finite(f64::NAN), Value::Null);
+        assert_eq!(finite(f64::NEG_INFINITY), Value::Null);
+        assert_eq!(finite(1.5), json!(1.5));
+    }
+}

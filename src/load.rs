@@ -1,0 +1,221 @@
+//! Loading a model and a recording for the measurement loop, whatever the model's kind: the
+//! one place that knows the kinds. A model is named by a file or a built-in name; a file
+//! with a `[cloth]` table is a cloth scene, any other model file a bond graph; the built-in
+//! names are the bond graphs `dc-motor` and `buck-motor` and the cloth scenes `corner`,
+//! `two-corners` and `drape`. Everything after loading — compare, explain, fix, the report,
+//! the text and JSON — goes through [`Model`] and its [`Story`](crate::story::Story), with no
+//! branch per kind.
+//!
+//! ```
+//! use modelgap::load::{LoadOptions, load_model, load_recording};
+//! use modelgap::{CompareOptions, compare};
+//!
+//! let motor = load_model("dc-motor", &LoadOptions::default())?;
+//! let rec = load_recording("examples/data/motor_hidden_effect.csv".as_ref(), motor.as_ref())?;
+//! let c = compare(motor.as_ref(), &rec, &CompareOptions::default())?;
+//! println!("{}", motor.story().comparison_text(&c));
+//! # Ok::<(), modelgap::Error>(())
+//! ```
+
+use std::path::Path;
+
+use modelgap_bond::model::Start;
+pub use modelgap_bond::simulate::Hold;
+use modelgap_bond::{BondModel, file::read_model_path, library};
+use modelgap_cloth::model::ClothModel;
+use modelgap_cloth::scenes::{self, Scene};
+use modelgap_core::{Model, Recording};
+
+use crate::{Error, Result};
+
+/// The kinds of model the loop holds against recordings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModelKind {
+    /// A bond graph: a model file, `dc-motor` or `buck-motor`.
+    BondGraph,
+    /// A cloth scene: a scene file (with a `[cloth]` table), `corner`, `two-corners` or `drape`.
+    ClothScene,
+}
+
+impl std::fmt::Display for ModelKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            ModelKind::BondGraph => "bond-graph model",
+            ModelKind::ClothScene => "cloth scene",
+        })
+    }
+}
+
+/// The built-in cloth scenes, by name.
+pub const CLOTH_SCENES: [&str; 3] = ["corner", "two-corners", "drape"];
+
+/// How a model is loaded for the loop. The options of one kind are refused, with a typed
+/// error saying so, for a model of the other.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadOptions {
+    /// Parameters or input defaults set first, in order (bond graphs: `--set R=1.2`; a
+    /// cloth scene is edited in its file).
+    pub set: Vec<(String, f64)>,
+    /// Start at the steady state under the recording's first inputs instead of at rest
+    /// (bond graphs; a cloth scene starts from its own initial state). Default false.
+    pub steady_start: bool,
+    /// How recorded inputs are held between samples (bond graphs). Default zero-order hold,
+    /// right for a commanded input.
+    pub hold: Hold,
+}
+
+impl Default for LoadOptions {
+    fn default() -> LoadOptions {
+        LoadOptions {
+            set: Vec::new(),
+            steady_start: false,
+            hold: Hold::Zero,
+        }
+    }
+}
+
+/// The names of every built-in model, comma-separated.
+pub fn builtin_names() -> String {
+    library::BUILTINS
+        .iter()
+        .map(|(name, _)| *name)
+        .chain(CLOTH_SCENES)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// True for text that names a file rather than a built-in model.
+fn looks_like_path(text: &str) -> bool {
+    text.contains('/') || text.contains('\\') || text.to_ascii_lowercase().ends_with(".toml")
+}
+
+/// What a path or name holds: a file with a `[cloth]` table is a cloth scene, any other file
+/// a bond-graph model; a name is a built-in.
+///
+/// # Errors
+/// [`Error::Input`] for a directory, a missing file, or a name that is no built-in (the
+/// message lists them).
+pub fn model_kind(path_or_name: &str) -> Result<ModelKind> {
+    let path = Path::new(path_or_name);
+    let builtin_bond = library::builtin(path_or_name).is_ok();
+    let builtin_cloth = CLOTH_SCENES.contains(&path_or_name.replace('_', "-").as_str());
+    if path.is_file() {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| modelgap_core::CoreError::io(e, Some(path)))?;
+        let cloth = text.lines().any(|l| l.trim_start().starts_with("[cloth]"));
+        return Ok(if cloth {
+            ModelKind::ClothScene
+        } else {
+            ModelKind::BondGraph
+        });
+    }
+    // A directory that happens to share a built-in's name does not hide the built-in.
+    if builtin_bond {
+        return Ok(ModelKind::BondGraph);
+    }
+    if builtin_cloth {
+        return Ok(ModelKind::ClothScene);
+    }
+    if path.is_dir() {
+        return Err(Error::Input(format!(
+            "model {} is a directory: give a model file (.toml) or a built-in model ({})",
+            path.display(),
+            builtin_names()
+        )));
+    }
+    if looks_like_path(path_or_name) {
+        return Err(Error::Input(format!(
+            "model file {} not found (built-in models: {})",
+            path.display(),
+            builtin_names()
+        )));
+    }
+    Err(Error::Input(format!(
+        "`{path_or_name}` is neither a model file nor a built-in model ({})",
+        builtin_names()
+    )))
+}
+
+/// Loads a model for the loop from a file or a built-in name, with `opts` applied.
+///
+/// # Errors
+/// As [`model_kind`]; the model file's read errors (line, column, element); a `--set` of an
+/// unknown or unphysical value ([`crate::BondError`]); [`Error::Input`] for an option the
+/// model's kind does not take.
+pub fn load_model(path_or_name: &str, opts: &LoadOptions) -> Result<Box<dyn Model>> {
+    match model_kind(path_or_name)? {
+        ModelKind::BondGraph => Ok(Box::new(load_bond(path_or_name, opts)?)),
+        ModelKind::ClothScene => Ok(Box::new(load_cloth(path_or_name, opts)?)),
+    }
+}
+
+/// A bond-graph model file or built-in, with `--set`, start and hold applied.
+fn load_bond(path_or_name: &str, opts: &LoadOptions) -> Result<BondModel> {
+    let path = Path::new(path_or_name);
+    let mut g = if path.is_file() {
+        read_model_path(path)?
+    } else {
+        library::builtin(path_or_name)?
+    };
+    for (name, value) in &opts.set {
+        g.set_param(name, *value).map_err(|source| Error::Set {
+            name: name.clone(),
+            value: *value,
+            source: Box::new(source),
+        })?;
+    }
+    let start = if opts.steady_start {
+        Start::SteadyState
+    } else {
+        Start::Rest
+    };
+    Ok(BondModel::new(g).with_start(start).with_hold(opts.hold))
+}
+
+/// A cloth scene file or built-in; the bond-graph options are refused.
+fn load_cloth(path_or_name: &str, opts: &LoadOptions) -> Result<ClothModel> {
+    let path = Path::new(path_or_name);
+    if let Some((name, value)) = opts.set.first() {
+        return Err(Error::Input(format!(
+            "--set {name}={value}: --set changes bond-graph models; edit the scene file \
+             {path_or_name} instead"
+        )));
+    }
+    if opts.steady_start || opts.hold != Hold::Zero {
+        return Err(Error::Input(
+            "--steady-start and --hold apply to bond-graph models; a cloth scene starts from its \
+             own initial state"
+                .to_owned(),
+        ));
+    }
+    let scene = if path.is_file() {
+        Scene::from_path(path)?
+    } else {
+        scenes::by_name(path_or_name)?
+    };
+    // The grid's size against its limit, before anything counts on nx × nz.
+    scene.cloth.n_vertices()?;
+    Ok(ClothModel::new(scene))
+}
+
+/// Reads a recording for `model` ([`Model::read_recording`]: signals for a bond graph,
+/// markers checked against the grid for a cloth scene).
+///
+/// # Errors
+/// [`Error::Input`] for a directory or a missing file; the reader's errors, which name the
+/// file and the line, field or message.
+pub fn load_recording(path: &Path, model: &dyn Model) -> Result<Recording> {
+    if path.is_dir() {
+        return Err(Error::Input(format!(
+            "{} is a directory: give a recording file (.csv or .mcap)",
+            path.display()
+        )));
+    }
+    if !path.exists() {
+        return Err(Error::Input(format!(
+            "recording {} not found",
+            path.display()
+        )));
+    }
+    Ok(model.read_recording(path)?)
+}
