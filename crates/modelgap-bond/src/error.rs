@@ -285,6 +285,18 @@ impl From<crate::ode::OdeError> for BondError {
     }
 }
 
+impl From<modelgap_core::effect::BadValues> for BondError {
+    /// Values a candidate cannot take: [`BondError::BadEffect`] with the
+    /// same candidate, parameter and detail.
+    fn from(e: modelgap_core::effect::BadValues) -> BondError {
+        BondError::BadEffect {
+            candidate: e.candidate,
+            param: e.param,
+            detail: e.detail,
+        }
+    }
+}
+
 /// `parameter L`, or ``the coefficient `(J) + dJ` `` for an expression.
 fn coefficient(param: &str, expression: bool) -> String {
     if expression {

@@ -31,7 +31,7 @@ use modelgap_core::{Candidate, CoreError, Effect, Model, Prediction, Recording};
 
 use crate::compiled::CompiledModel;
 use crate::diagnosis::{DiagnosisOptions, diagnose};
-use crate::effects;
+use crate::effects::{self, BondEffect};
 use crate::element::{ElementKind, Law};
 use crate::error::{BondError, Result};
 use crate::fault_tree::first_hypothesis_set;
@@ -126,6 +126,9 @@ impl BondModel {
     /// The graph with effects applied in turn, and the parameter changes of
     /// the model followed by those of the effects.
     ///
+    /// Each candidate is read into its kind ([`BondEffect::from_candidate`])
+    /// against the graph as edited so far.
+    ///
     /// # Errors
     /// [`BondError::BadEffect`] for an effect the graph does not offer or
     /// values outside the candidate's bounds (see [`effects::apply`]).
@@ -136,7 +139,8 @@ impl BondModel {
         let mut graph = self.graph.clone();
         let mut changes = self.changes.clone();
         for (candidate, values) in effects {
-            let (g, ch) = effects::apply(&graph, candidate, values)?;
+            let (g, ch) =
+                BondEffect::from_candidate(candidate, &graph)?.apply(&graph, candidate, values)?;
             graph = g;
             changes.extend(ch);
         }
@@ -477,7 +481,9 @@ impl Model for BondModel {
     /// junction's inertia (either sign). `None` for the others, when the
     /// diagnosis cannot run, or when it detects nothing.
     fn qualitative_agreement(&self, rec: &Recording, candidate: &Candidate) -> Option<bool> {
-        let targets = effects::qualitative_targets(&self.graph, candidate)?;
+        let targets = BondEffect::from_candidate(candidate, &self.graph)
+            .ok()?
+            .qualitative_signature(&self.graph)?;
         let opts = DiagnosisOptions {
             threshold: Threshold::Noise { sigmas: 5.0 },
             persistence: 3,

@@ -4,6 +4,13 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
+use crate::error::CoreError;
+
+/// Slack within which a value still counts as inside its bounds, relative to
+/// the bound (or to the parameter's scale, for a bound at 0): rounding in a
+/// fit's projection onto the bounds.
+pub const BOUND_SLACK: f64 = 1e-12;
+
 /// What kind of change a candidate is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -51,6 +58,49 @@ pub struct EffectParam {
     pub grid: usize,
 }
 
+impl EffectParam {
+    /// A parameter starting at `initial` within `bounds` (lower, upper), of
+    /// typical size `scale`, with no grid of start values.
+    ///
+    /// # Example
+    /// ```
+    /// # use modelgap_core::EffectParam;
+    /// let tau_c = EffectParam::new("tau_c", "N m", 0.0, (0.0, 0.5), 0.01);
+    /// assert_eq!((tau_c.lower, tau_c.upper, tau_c.grid), (0.0, 0.5, 0));
+    /// ```
+    pub fn new(
+        name: impl Into<String>,
+        unit: impl Into<String>,
+        initial: f64,
+        bounds: (f64, f64),
+        scale: f64,
+    ) -> EffectParam {
+        EffectParam {
+            name: name.into(),
+            unit: unit.into(),
+            initial,
+            lower: bounds.0,
+            upper: bounds.1,
+            scale,
+            grid: 0,
+        }
+    }
+
+    /// The same parameter with `grid` evenly spaced start values across its
+    /// bounds (see [`EffectParam::grid`]).
+    #[must_use]
+    pub fn with_grid(mut self, grid: usize) -> EffectParam {
+        self.grid = grid;
+        self
+    }
+
+    /// True when `value` lies within the bounds, up to [`BOUND_SLACK`].
+    pub fn admits(&self, value: f64) -> bool {
+        let slack = |bound: f64| BOUND_SLACK * bound.abs().max(self.scale.abs());
+        value >= self.lower - slack(self.lower) && value <= self.upper + slack(self.upper)
+    }
+}
+
 /// An effect a model may be missing, before it is fitted.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Candidate {
@@ -71,6 +121,92 @@ impl Candidate {
     pub fn initial(&self) -> Vec<f64> {
         self.params.iter().map(|p| p.initial).collect()
     }
+
+    /// Checks values for this candidate: one per parameter, each finite and
+    /// within its bounds (up to [`BOUND_SLACK`]).
+    ///
+    /// # Errors
+    /// [`BadValues`] naming the candidate and the parameter (none for a
+    /// wrong count); `?` turns it into [`CoreError::Model`].
+    ///
+    /// # Example
+    /// ```
+    /// # use modelgap_core::{Candidate, EffectKind, EffectParam};
+    /// let c = Candidate {
+    ///     id: "coulomb@1m".into(),
+    ///     name: "Coulomb friction on the shaft".into(),
+    ///     kind: EffectKind::MissingElement,
+    ///     acts_on: "1m".into(),
+    ///     params: vec![EffectParam::new("tau_c", "N m", 0.0, (0.0, 0.5), 0.01)],
+    /// };
+    /// assert!(c.check_values(&[0.01]).is_ok());
+    /// let err = c.check_values(&[-1.0]).unwrap_err();
+    /// assert_eq!(err.param, "tau_c");
+    /// ```
+    pub fn check_values(&self, values: &[f64]) -> Result<(), BadValues> {
+        let bad = |param: &str, detail: String| BadValues {
+            candidate: self.id.clone(),
+            param: param.to_string(),
+            detail,
+        };
+        if values.len() != self.params.len() {
+            return Err(bad(
+                "",
+                format!(
+                    "expected {} value{} ({}), found {}",
+                    self.params.len(),
+                    if self.params.len() == 1 { "" } else { "s" },
+                    self.params
+                        .iter()
+                        .map(|p| p.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    values.len()
+                ),
+            ));
+        }
+        for (p, &v) in self.params.iter().zip(values) {
+            if !v.is_finite() {
+                return Err(bad(
+                    &p.name,
+                    format!("parameter '{}' must be finite, found {v}", p.name),
+                ));
+            }
+            if !p.admits(v) {
+                return Err(bad(
+                    &p.name,
+                    format!(
+                        "parameter '{}' = {v} {} is outside its bounds [{}, {}]",
+                        p.name, p.unit, p.lower, p.upper
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Values a candidate cannot take: a wrong count, a value that is not
+/// finite or one outside its bounds (see [`Candidate::check_values`]).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("effect '{candidate}': {detail}")]
+pub struct BadValues {
+    /// The candidate's id (`coulomb@1m`).
+    pub candidate: String,
+    /// The parameter concerned; empty for a wrong number of values.
+    pub param: String,
+    /// What is wrong, naming the parameter.
+    pub detail: String,
+}
+
+impl From<BadValues> for CoreError {
+    /// A model cannot be edited with these values: [`CoreError::Model`] with
+    /// the same message.
+    fn from(e: BadValues) -> CoreError {
+        CoreError::Model {
+            message: e.to_string(),
+        }
+    }
 }
 
 /// A candidate with fitted parameter values: what `fix` adds to a model.
@@ -89,5 +225,73 @@ impl fmt::Display for Effect {
             write!(f, " {}={:.4e} {}", p.name, v, p.unit)?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn coulomb() -> Candidate {
+        Candidate {
+            id: "coulomb@1m".into(),
+            name: "Coulomb friction".into(),
+            kind: EffectKind::MissingElement,
+            acts_on: "1m".into(),
+            params: vec![EffectParam::new("tau_c", "N m", 0.0, (0.0, 0.5), 0.01)],
+        }
+    }
+
+    #[test]
+    fn values_within_bounds_pass_up_to_the_slack() {
+        let c = coulomb();
+        for v in [0.0, 0.25, 0.5, -1e-15, 0.5 + 1e-13] {
+            assert!(c.check_values(&[v]).is_ok(), "{v}");
+        }
+    }
+
+    #[test]
+    fn bad_values_name_the_candidate_the_parameter_and_the_fault() {
+        let c = coulomb();
+        for (values, param, says) in [
+            (
+                vec![f64::NAN],
+                "tau_c",
+                "parameter 'tau_c' must be finite, found NaN",
+            ),
+            (vec![f64::INFINITY], "tau_c", "must be finite, found inf"),
+            (
+                vec![-0.1],
+                "tau_c",
+                "parameter 'tau_c' = -0.1 N m is outside its bounds [0, 0.5]",
+            ),
+            (vec![], "", "expected 1 value (tau_c), found 0"),
+            (vec![0.1, 0.2], "", "expected 1 value (tau_c), found 2"),
+        ] {
+            let err = c.check_values(&values).unwrap_err();
+            assert_eq!(
+                (err.candidate.as_str(), err.param.as_str()),
+                ("coulomb@1m", param)
+            );
+            let text = err.to_string();
+            assert!(text.starts_with("effect 'coulomb@1m': "), "{text}");
+            assert!(text.contains(says), "{text}");
+            let core = CoreError::from(err);
+            assert!(matches!(core, CoreError::Model { .. }));
+            assert_eq!(core.to_string(), text);
+        }
+    }
+
+    #[test]
+    fn a_grid_is_set_by_with_grid() {
+        let p = EffectParam::new("N_cog", "1", 6.0, (2.0, 24.0), 6.0).with_grid(12);
+        assert_eq!(
+            (p.name.as_str(), p.unit.as_str(), p.grid),
+            ("N_cog", "1", 12)
+        );
+        assert_eq!(
+            (p.initial, p.lower, p.upper, p.scale),
+            (6.0, 2.0, 24.0, 6.0)
+        );
     }
 }

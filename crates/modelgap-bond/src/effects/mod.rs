@@ -41,23 +41,71 @@
 //! kept within [10⁻³, 10⁻¹] of the peak, and may reach the peak effort (a
 //! friction beyond what the drive can ever apply would hold the machine
 //! still). A model that cannot be simulated gets scale 1 everywhere.
-
 //!
-//! Submodules: `menu` ([`candidates`]), `scales` (the model's own scales),
-//! `edit` ([`apply`]).
+//! # Files
+//!
+//! One file per kind of effect, each a small struct naming where it acts
+//! and implementing [`EffectDef`] (offer, candidate, edit, qualitative
+//! signature, vanishing values):
+//!
+//! - [`deviation`](Deviation) (`deviation:<p>`), [`factor`](Factor) (`deviation:<u>`,
+//!   a modulus input), [`fault`](Fault) (`fault:<p>`, `fault:<u>`);
+//! - on junctions: [`viscous`](Viscous), [`coulomb`](Coulomb), [`load`](Load),
+//!   [`inertia`](Inertia), [`coupling`](Coupling), [`cogging`](Cogging),
+//!   [`brush`](Brush); on an I: [`saturation`](Saturation).
+//!
+//! Around them: `def` (the trait [`EffectDef`]), `bond_effect` (the enum
+//! [`BondEffect`] over the kinds, and [`BondEffect::from_candidate`], the one
+//! place an id is read), `tag` (the id prefixes, written and read), `menu`
+//! ([`candidates`]: each kind's offers in turn), `domain` ([`Domain`]),
+//! `junction` ([`Junction`]: where element effects attach), `edit` (what the
+//! edits share: fresh names, new parameters, attached one-ports) and
+//! `scales` ([`Scales`]: the model's own scales).
 
+mod bond_effect;
+mod brush;
+mod cogging;
+mod coulomb;
+mod coupling;
+mod def;
+mod deviation;
+mod domain;
 mod edit;
+mod factor;
+mod fault;
+mod inertia;
+mod junction;
+mod load;
 mod menu;
+mod saturation;
 mod scales;
+mod tag;
+mod viscous;
 
-use modelgap_core::{Candidate, EffectKind};
+use modelgap_core::Candidate;
 
-use crate::element::{ElementKind, Law};
-use crate::expr::{Expr, Func};
-use crate::graph::{BondGraph, Direction, ElementId};
+use crate::error::Result;
+use crate::graph::BondGraph;
+use crate::simulate::ParamChange;
 
-pub use edit::apply;
-pub use menu::candidates;
+pub use bond_effect::BondEffect;
+pub use brush::Brush;
+pub use cogging::Cogging;
+pub(crate) use cogging::is_periodic;
+pub use coulomb::Coulomb;
+pub use coupling::Coupling;
+pub use def::{EffectDef, QualTarget};
+pub use deviation::Deviation;
+pub use domain::Domain;
+pub use factor::Factor;
+pub use fault::{Fault, Faulted};
+pub use inertia::Inertia;
+pub use junction::{Junction, junction_domain};
+pub use load::Load;
+pub use menu::{candidates, offered};
+pub use saturation::Saturation;
+pub use scales::Scales;
+pub use viscous::Viscous;
 
 /// The name of the fault-time parameter of every abrupt-change candidate.
 ///
@@ -85,136 +133,43 @@ pub const CONTACT_SMOOTHING_A: f64 = 1e-2;
 /// pole counts. A local fit cannot find a period count from afar.
 pub const COGGING_GRID: usize = 12;
 
-/// The physical domain of a 1-junction, from the inertia bonded to it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Domain {
-    /// An electrical loop: common current, I is an inductance (H).
-    Electrical,
-    /// A shaft: common angular speed, I is an inertia (kg m²).
-    Rotational,
-    /// A moving body: common velocity, I is a mass (kg).
-    Translational,
-}
-
-impl Domain {
-    /// The domain a storage parameter's unit belongs to, if any (see the module docs).
-    pub fn of_unit(unit: &str) -> Option<Domain> {
-        let compact: String = unit
-            .chars()
-            .filter(|c| !matches!(c, ' ' | '*' | '·' | '.'))
-            .collect();
-        if matches!(compact.as_str(), "kgm^2" | "kgm²" | "kgm2") {
-            return Some(Domain::Rotational);
-        }
-        if compact == "kg" {
-            return Some(Domain::Translational);
-        }
-        if compact == "Wb/A" || unit.split(|c: char| !c.is_alphanumeric()).any(|t| t == "H") {
-            return Some(Domain::Electrical);
-        }
-        None
-    }
-
-    fn effort_unit(self) -> &'static str {
-        match self {
-            Domain::Electrical => "V",
-            Domain::Rotational => "N m",
-            Domain::Translational => "N",
-        }
-    }
-
-    fn flow_unit(self) -> &'static str {
-        match self {
-            Domain::Electrical => "A",
-            Domain::Rotational => "rad/s",
-            Domain::Translational => "m/s",
-        }
-    }
-
-    fn inertia_unit(self) -> &'static str {
-        match self {
-            Domain::Electrical => "H",
-            Domain::Rotational => "kg m^2",
-            Domain::Translational => "kg",
-        }
-    }
-
-    fn damping_unit(self) -> &'static str {
-        match self {
-            Domain::Electrical => "Ohm",
-            Domain::Rotational => "N m s/rad",
-            Domain::Translational => "N s/m",
-        }
-    }
-
-    fn stiffness_unit(self) -> &'static str {
-        match self {
-            Domain::Electrical => "1/F",
-            Domain::Rotational => "N m/rad",
-            Domain::Translational => "N/m",
-        }
-    }
-
-    fn effort_word(self) -> &'static str {
-        match self {
-            Domain::Electrical => "voltage",
-            Domain::Rotational => "torque",
-            Domain::Translational => "force",
-        }
-    }
-
-    fn inertia_word(self) -> &'static str {
-        match self {
-            Domain::Electrical => "inductance",
-            Domain::Rotational => "inertia",
-            Domain::Translational => "mass",
-        }
-    }
-
-    /// Parameter-name stems: (effort strength, inertia increment, second inertia).
-    fn stems(self) -> (&'static str, &'static str, &'static str) {
-        match self {
-            Domain::Rotational => ("tau", "dJ", "J2"),
-            Domain::Translational => ("F", "dm", "m2"),
-            Domain::Electrical => ("v", "dL", "L2"),
-        }
-    }
-
-    fn coulomb_smoothing(self) -> f64 {
-        match self {
-            Domain::Rotational => COULOMB_SMOOTHING_RAD_S,
-            Domain::Translational => COULOMB_SMOOTHING_M_S,
-            Domain::Electrical => CONTACT_SMOOTHING_A,
-        }
-    }
-}
-
-/// The domain of a 1-junction and the I element that sets it, or `None`
-/// when no I bonded to it has a parameter with a domain unit (see the module docs).
-pub fn junction_domain(g: &BondGraph, junction: ElementId) -> Option<(Domain, ElementId)> {
-    if g.element(junction).kind != ElementKind::One {
-        return None;
-    }
-    for (bond, _) in g.ports(junction) {
-        let other = g.other_end(bond, junction);
-        let el = g.element(other);
-        if el.kind != ElementKind::I {
-            continue;
-        }
-        let exprs: Vec<&Expr> = match &el.law {
-            Law::Linear(e) => vec![e],
-            Law::Nonlinear { effort, flow } => flow.iter().chain(effort.iter()).collect(),
-            _ => Vec::new(),
-        };
-        for e in exprs {
-            for name in e.params() {
-                if let Some(d) = g.params().get(&name).and_then(|p| Domain::of_unit(&p.unit)) {
-                    return Some((d, other));
-                }
-            }
-        }
-    }
-    None
+/// Applies a candidate at `values`: the edited graph, and the parameter
+/// changes to make during a simulation (abrupt changes only).
+///
+/// Reads the candidate ([`BondEffect::from_candidate`]) and applies its
+/// kind ([`EffectDef::apply`]). Deviations set the parameter (a modulus
+/// input gets a factor parameter `<u>_factor` on its MTF/MGY law); abrupt
+/// changes leave the graph as is (a modulus gets its factor at 1) and return
+/// a [`ParamChange`] at `t_fault`; missing elements append elements, bonds
+/// and parameters (named `<stem>_<junction>`, with `_2`, `_3`, … when
+/// taken), or change the law of the junction's I (extra inertia,
+/// saturation). Ids are append-only, so the ids of `g` stay valid in the
+/// result.
+///
+/// # Errors
+/// [`BondError::BadEffect`](crate::BondError::BadEffect) naming the
+/// candidate and the parameter for a candidate this graph does not offer
+/// (unknown parameter, junction or element), a wrong number of values, or a
+/// value that is not finite or outside its bounds; graph errors if the edit
+/// breaks the graph (a bug).
+///
+/// # Example
+/// ```
+/// # use modelgap_bond::{effects, library, CompiledModel};
+/// let motor = library::dc_motor();
+/// let menu = effects::candidates(&motor);
+/// let coulomb = menu.iter().find(|c| c.id == "coulomb@1m").unwrap();
+/// let (edited, changes) = effects::apply(&motor, coulomb, &[0.01]).unwrap();
+/// assert!(changes.is_empty());
+/// assert!(edited.find("coulomb_1m").is_some());
+/// assert!(CompiledModel::new(&edited).is_ok());
+/// ```
+pub fn apply(
+    g: &BondGraph,
+    candidate: &Candidate,
+    values: &[f64],
+) -> Result<(BondGraph, Vec<ParamChange>)> {
+    BondEffect::from_candidate(candidate, g)?.apply(g, candidate, values)
 }
 
 /// The values at which a missing-element candidate has no effect at all:
@@ -222,111 +177,7 @@ pub fn junction_domain(g: &BondGraph, junction: ElementId) -> Option<(Domain, El
 /// amplitude, brush drop, saturation coefficient) at 0 and any other
 /// parameter (the cogging period count) at its initial value. `None` for
 /// deviations, abrupt changes and the coupling (a second inertia cannot
-/// vanish: `J2 → 0` is singular).
+/// vanish: `J2 → 0` is singular). See [`BondEffect::vanishing_values`].
 pub fn vanishing_values(c: &Candidate) -> Option<Vec<f64>> {
-    let (prefix, _) = c.id.split_once('@')?;
-    if c.kind != EffectKind::MissingElement || prefix == "coupling" {
-        return None;
-    }
-    Some(
-        c.params
-            .iter()
-            .map(|p| if p.name == "N_cog" { p.initial } else { 0.0 })
-            .collect(),
-    )
-}
-
-/// The parameters of the graph a candidate's edit mentions, with the
-/// deviation sign that the qualitative diagnosis would show for it (`None`:
-/// either sign). Used by [`crate::model::BondModel`]'s qualitative check.
-pub(crate) fn qualitative_targets(
-    g: &BondGraph,
-    c: &Candidate,
-) -> Option<Vec<(String, Option<crate::qual::Qual>)>> {
-    use crate::qual::Qual;
-    if let Some((_, target)) = c.id.split_once(':') {
-        return Some(vec![(target.to_string(), None)]);
-    }
-    let (kind, target) = c.id.split_once('@')?;
-    let j = g.find(target)?;
-    // Linear R parameters and load inputs on the junction.
-    let mut r_params = Vec::new();
-    let mut loads = Vec::new();
-    let mut inertias = Vec::new();
-    for (bond, dir) in g.ports(j) {
-        let other = g.other_end(bond, j);
-        let el = g.element(other);
-        match (&el.kind, &el.law) {
-            (ElementKind::R, Law::Linear(Expr::Param(p))) if g.params().contains_key(p) => {
-                r_params.push(p.clone());
-            }
-            (ElementKind::Se, Law::Source(Expr::Param(u))) if g.inputs().contains_key(u) => {
-                // The bond leaves the junction into the source: a positive value opposes motion.
-                let sign = if dir == Direction::Out {
-                    Qual::Plus
-                } else {
-                    Qual::Minus
-                };
-                loads.push((u.clone(), Some(sign)));
-            }
-            (ElementKind::I, Law::Linear(e)) => {
-                inertias.extend(e.params().into_iter().map(|p| (p, None)));
-            }
-            _ => {}
-        }
-    }
-    let plus = |v: Vec<String>| -> Vec<(String, Option<Qual>)> {
-        v.into_iter().map(|p| (p, Some(Qual::Plus))).collect()
-    };
-    let out = match kind {
-        "viscous" | "brush" => plus(r_params),
-        "coulomb" | "load" => {
-            let mut v = loads;
-            v.extend(plus(r_params));
-            v
-        }
-        "inertia" => inertias,
-        _ => return None,
-    };
-    if out.is_empty() { None } else { Some(out) }
-}
-
-/// True when an expression calls `sin` or `cos`: a periodic law.
-pub(crate) fn is_periodic(e: &Expr) -> bool {
-    let mut found = false;
-    e.walk(&mut |x| {
-        if matches!(x, Expr::Call(Func::Sin | Func::Cos, _)) {
-            found = true;
-        }
-    });
-    found
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn storage_units_give_the_junction_domain() {
-        for (unit, domain) in [
-            ("H", Some(Domain::Electrical)),
-            ("Wb/A", Some(Domain::Electrical)),
-            ("kg m^2", Some(Domain::Rotational)),
-            ("kg*m^2", Some(Domain::Rotational)),
-            ("kg·m²", Some(Domain::Rotational)),
-            ("kg", Some(Domain::Translational)),
-            ("Hz", None),
-            ("N m/A", None),
-            ("", None),
-        ] {
-            assert_eq!(Domain::of_unit(unit), domain, "{unit}");
-        }
-    }
-
-    #[test]
-    fn periodic_laws_are_recognised() {
-        let law = crate::expr::parse("A * sin(N * q)").unwrap();
-        assert!(is_periodic(&law));
-        assert!(!is_periodic(&crate::expr::parse("q / C").unwrap()));
-    }
+    BondEffect::vanishing_values(c)
 }

@@ -57,9 +57,11 @@ fn positive_or(x: f64, fallback: f64) -> f64 {
 }
 
 /// The model's own scales: per 1-junction effort and flow levels, per storage
-/// element the peak state, and the slowest mode's rate.
+/// element the peak state, and the slowest mode's rate (see the
+/// [module docs](super) for how they are found). The candidates' scales and
+/// bounds come from them.
 #[derive(Clone, Debug, Default)]
-pub(super) struct Scales {
+pub struct Scales {
     effort: BTreeMap<ElementId, Level>,
     flow: BTreeMap<ElementId, Level>,
     pub(super) state_peak: BTreeMap<ElementId, f64>,
@@ -67,7 +69,9 @@ pub(super) struct Scales {
 }
 
 impl Scales {
-    pub(super) fn of(g: &BondGraph) -> Scales {
+    /// The scales of `g`, from a start-up from rest under its default
+    /// inputs; empty (every scale 1) when `g` cannot be simulated.
+    pub fn of(g: &BondGraph) -> Scales {
         let mut s = Scales::default();
         let Ok(model) = CompiledModel::new(g) else {
             return s;

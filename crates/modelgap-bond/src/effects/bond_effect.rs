@@ -1,0 +1,265 @@
+//! [`BondEffect`]: the enum over the kinds of effect, and the one place a
+//! candidate's id is read ([`BondEffect::from_candidate`]).
+
+use modelgap_core::{Candidate, EffectKind};
+
+use super::def::{EffectDef, QualTarget};
+use super::edit::bad;
+use super::scales::Scales;
+use super::tag::Tag;
+use super::{
+    Brush, Cogging, Coulomb, Coupling, Deviation, Factor, Fault, Faulted, Inertia, Junction, Load,
+    Saturation, Viscous,
+};
+use crate::error::{BondError, Result};
+use crate::graph::BondGraph;
+use crate::simulate::ParamChange;
+
+/// A candidate effect of a bond graph, typed: its kind and where it acts.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum BondEffect {
+    /// `deviation:<p>`: a parameter is off.
+    Deviation(Deviation),
+    /// `deviation:<u>`: a modulus input is off by a factor.
+    Factor(Factor),
+    /// `fault:<p>`, `fault:<u>`: an abrupt change at an unknown time.
+    Fault(Fault),
+    /// `viscous@<j>`: viscous friction.
+    Viscous(Viscous),
+    /// `coulomb@<j>`: Coulomb friction.
+    Coulomb(Coulomb),
+    /// `load@<j>`: a constant load.
+    Load(Load),
+    /// `inertia@<j>`: extra inertia.
+    Inertia(Inertia),
+    /// `coupling@<j>`: a flexible coupling to a second inertia.
+    Coupling(Coupling),
+    /// `cogging@<j>`: cogging torque.
+    Cogging(Cogging),
+    /// `brush@<j>`: a brush/contact voltage drop.
+    Brush(Brush),
+    /// `saturation@<I>`: magnetic saturation.
+    Saturation(Saturation),
+}
+
+macro_rules! from_kind {
+    ($($kind:ident),*) => {$(
+        impl From<$kind> for BondEffect {
+            fn from(k: $kind) -> BondEffect {
+                BondEffect::$kind(k)
+            }
+        }
+    )*};
+}
+from_kind!(
+    Deviation, Factor, Fault, Viscous, Coulomb, Load, Inertia, Coupling, Cogging, Brush, Saturation
+);
+
+impl BondEffect {
+    /// Reads a candidate of `g`: its id names the kind and where it acts
+    /// (a parameter or input after `:`, an element after `@`). The only
+    /// place the bond crate reads a candidate's id.
+    ///
+    /// # Errors
+    /// [`BondError::BadEffect`] naming the candidate for an id no kind
+    /// writes, or one `g` cannot take: an unknown parameter, modulus input,
+    /// junction or I element, or a junction of the wrong domain.
+    ///
+    /// # Example
+    /// ```
+    /// # use modelgap_bond::effects::{self, BondEffect};
+    /// # use modelgap_bond::library;
+    /// let motor = library::dc_motor();
+    /// let menu = effects::candidates(&motor);
+    /// let coulomb = menu.iter().find(|c| c.id == "coulomb@1m").unwrap();
+    /// let effect = BondEffect::from_candidate(coulomb, &motor).unwrap();
+    /// assert!(matches!(effect, BondEffect::Coulomb(_)));
+    /// ```
+    pub fn from_candidate(c: &Candidate, g: &BondGraph) -> Result<BondEffect> {
+        let (tag, target) = Tag::read(&c.id).ok_or_else(|| unknown(c))?;
+        let steady = || -> Result<Faulted> {
+            if let Some(d) = Deviation::at(g, target) {
+                Ok(Faulted::Parameter(d))
+            } else if let Some(f) = Factor::at(g, target) {
+                Ok(Faulted::Modulus(f))
+            } else {
+                Err(bad(
+                    c,
+                    "",
+                    format!("the model has no parameter or modulus input '{target}'"),
+                ))
+            }
+        };
+        let junction = || -> Result<Junction> {
+            let id = g.find(target).ok_or_else(|| {
+                bad(
+                    c,
+                    "",
+                    format!("the model has no junction '{target}' for this effect"),
+                )
+            })?;
+            Junction::of(g, id).ok_or_else(|| {
+                bad(
+                    c,
+                    "",
+                    format!("'{target}' is not a 1-junction with an inertia (I) of known unit"),
+                )
+            })
+        };
+        let effect = match tag {
+            Tag::Deviation => match steady()? {
+                Faulted::Parameter(d) => Some(BondEffect::Deviation(d)),
+                Faulted::Modulus(f) => Some(BondEffect::Factor(f)),
+            },
+            Tag::Fault => Some(BondEffect::Fault(Fault { of: steady()? })),
+            Tag::Saturation => {
+                let s = g.find(target).and_then(|id| Saturation::at(g, id));
+                let s =
+                    s.ok_or_else(|| bad(c, "", format!("the model has no I element '{target}'")))?;
+                Some(BondEffect::Saturation(s))
+            }
+            Tag::Viscous => Viscous::at(junction()?).map(Into::into),
+            Tag::Coulomb => Coulomb::at(junction()?).map(Into::into),
+            Tag::Load => Load::at(junction()?).map(Into::into),
+            Tag::Inertia => Inertia::at(junction()?).map(Into::into),
+            Tag::Coupling => Coupling::at(junction()?).map(Into::into),
+            Tag::Cogging => Cogging::at(junction()?).map(Into::into),
+            Tag::Brush => Brush::at(junction()?).map(Into::into),
+        };
+        effect.ok_or_else(|| unknown(c))
+    }
+
+    /// The kind's definition.
+    pub fn def(&self) -> &dyn EffectDef {
+        match self {
+            BondEffect::Deviation(k) => k,
+            BondEffect::Factor(k) => k,
+            BondEffect::Fault(k) => k,
+            BondEffect::Viscous(k) => k,
+            BondEffect::Coulomb(k) => k,
+            BondEffect::Load(k) => k,
+            BondEffect::Inertia(k) => k,
+            BondEffect::Coupling(k) => k,
+            BondEffect::Cogging(k) => k,
+            BondEffect::Brush(k) => k,
+            BondEffect::Saturation(k) => k,
+        }
+    }
+
+    /// The junction an element effect attaches to; `None` for changes of a
+    /// parameter and for saturation (which acts on an I).
+    pub fn junction(&self) -> Option<Junction> {
+        match self {
+            BondEffect::Viscous(Viscous { junction })
+            | BondEffect::Coulomb(Coulomb { junction })
+            | BondEffect::Load(Load { junction })
+            | BondEffect::Inertia(Inertia { junction })
+            | BondEffect::Coupling(Coupling { junction })
+            | BondEffect::Cogging(Cogging { junction })
+            | BondEffect::Brush(Brush { junction }) => Some(*junction),
+            BondEffect::Deviation(_)
+            | BondEffect::Factor(_)
+            | BondEffect::Fault(_)
+            | BondEffect::Saturation(_) => None,
+        }
+    }
+
+    /// The candidate (see [`EffectDef::candidate`]).
+    pub fn candidate(&self, g: &BondGraph, scales: &Scales) -> Candidate {
+        self.def().candidate(g, scales)
+    }
+
+    /// `g` with the effect applied at `values` (see [`EffectDef::apply`]).
+    ///
+    /// # Errors
+    /// As [`EffectDef::apply`].
+    pub fn apply(
+        &self,
+        g: &BondGraph,
+        c: &Candidate,
+        values: &[f64],
+    ) -> Result<(BondGraph, Vec<ParamChange>)> {
+        self.def().apply(g, c, values)
+    }
+
+    /// The parameters the fault trees would name (see
+    /// [`EffectDef::qualitative_signature`]).
+    pub fn qualitative_signature(&self, g: &BondGraph) -> Option<Vec<QualTarget>> {
+        self.def().qualitative_signature(g)
+    }
+
+    /// The values at which candidate `c` does nothing at all, from its kind
+    /// alone (no graph needed; see [`EffectDef::vanishing_values`]): `None`
+    /// for an id no kind writes and for candidates that are not missing elements.
+    pub fn vanishing_values(c: &Candidate) -> Option<Vec<f64>> {
+        if c.kind != EffectKind::MissingElement {
+            return None;
+        }
+        let (tag, _) = Tag::read(&c.id)?;
+        match tag {
+            Tag::Deviation | Tag::Fault => None,
+            Tag::Viscous => Viscous::vanishing_values(c),
+            Tag::Coulomb => Coulomb::vanishing_values(c),
+            Tag::Load => Load::vanishing_values(c),
+            Tag::Inertia => Inertia::vanishing_values(c),
+            Tag::Coupling => Coupling::vanishing_values(c),
+            Tag::Cogging => Cogging::vanishing_values(c),
+            Tag::Brush => Brush::vanishing_values(c),
+            Tag::Saturation => Saturation::vanishing_values(c),
+        }
+    }
+}
+
+/// The error for a candidate no kind of this model takes.
+fn unknown(c: &Candidate) -> BondError {
+    bad(
+        c,
+        "",
+        format!(
+            "not an effect of this model (expected {} on a matching junction)",
+            Tag::expected()
+        ),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::effects::offered;
+    use crate::library;
+
+    #[test]
+    fn every_offered_effect_reads_back_from_its_candidate() {
+        for g in [library::dc_motor(), library::buck_motor()] {
+            let scales = Scales::of(&g);
+            for e in offered(&g) {
+                let c = e.candidate(&g, &scales);
+                let read = BondEffect::from_candidate(&c, &g).unwrap();
+                assert_eq!(read, e, "{}", c.id);
+            }
+        }
+    }
+
+    #[test]
+    fn ids_the_graph_cannot_take_are_refused_naming_the_candidate() {
+        let g = library::dc_motor();
+        let menu = crate::effects::candidates(&g);
+        for (id, says) in [
+            ("foo@1m", "not an effect of this model"),
+            ("coulomb@zz", "no junction 'zz'"),
+            ("coulomb@1e", "not an effect of this model"),
+            ("brush@1m", "not an effect of this model"),
+            ("cogging@L", "'L' is not a 1-junction"),
+            ("deviation:zz", "no parameter or modulus input 'zz'"),
+            ("fault:zz", "no parameter or modulus input 'zz'"),
+            ("saturation@R", "no I element 'R'"),
+        ] {
+            let mut c = menu[0].clone();
+            c.id = id.to_string();
+            let err = BondEffect::from_candidate(&c, &g).unwrap_err();
+            let text = err.to_string();
+            assert!(text.starts_with(&format!("effect '{id}': ")), "{text}");
+            assert!(text.contains(says), "{text}");
+        }
+    }
+}

@@ -1,0 +1,90 @@
+//! Candidate ids: `<kind>:<parameter>` for changes of a parameter,
+//! `<kind>@<element>` for missing elements. The one place ids are written
+//! ([`Tag::id`]) and read ([`Tag::read`]).
+
+/// The kind an id names, before the graph says where it acts: deviations of
+/// a parameter and factors on a modulus input share `deviation:`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Tag {
+    Deviation,
+    Fault,
+    Viscous,
+    Coulomb,
+    Load,
+    Inertia,
+    Coupling,
+    Cogging,
+    Brush,
+    Saturation,
+}
+
+/// Every tag with its id prefix, in menu order.
+const PREFIXES: [(Tag, &str); 10] = [
+    (Tag::Deviation, "deviation:"),
+    (Tag::Fault, "fault:"),
+    (Tag::Viscous, "viscous@"),
+    (Tag::Coulomb, "coulomb@"),
+    (Tag::Load, "load@"),
+    (Tag::Inertia, "inertia@"),
+    (Tag::Coupling, "coupling@"),
+    (Tag::Cogging, "cogging@"),
+    (Tag::Brush, "brush@"),
+    (Tag::Saturation, "saturation@"),
+];
+
+impl Tag {
+    /// The id prefix (`coulomb@`).
+    fn prefix(self) -> &'static str {
+        PREFIXES
+            .iter()
+            .find(|(t, _)| *t == self)
+            .map_or("", |(_, p)| p)
+    }
+
+    /// The id of this kind acting on `target` (`coulomb@1m`, `deviation:R`).
+    pub(super) fn id(self, target: &str) -> String {
+        format!("{}{target}", self.prefix())
+    }
+
+    /// The tag and target of an id, or `None` for an id no kind writes.
+    pub(super) fn read(id: &str) -> Option<(Tag, &str)> {
+        PREFIXES
+            .iter()
+            .find_map(|&(tag, prefix)| Some((tag, id.strip_prefix(prefix)?)))
+    }
+
+    /// The prefixes, for a message listing what an id may start with:
+    /// `deviation:, fault:, … or saturation@`.
+    pub(super) fn expected() -> String {
+        let all: Vec<&str> = PREFIXES.iter().map(|(_, p)| *p).collect();
+        match all.split_last() {
+            Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+            None => String::new(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ids_read_back_to_their_tag_and_target() {
+        for (tag, _) in PREFIXES {
+            assert_eq!(Tag::read(&tag.id("1m")), Some((tag, "1m")));
+        }
+        assert_eq!(Tag::read("deviation:R"), Some((Tag::Deviation, "R")));
+        assert_eq!(Tag::read("coulomb@1m"), Some((Tag::Coulomb, "1m")));
+        for id in ["coulomb", "x:R", "foo@1m", ""] {
+            assert_eq!(Tag::read(id), None, "{id}");
+        }
+    }
+
+    #[test]
+    fn the_expected_prefixes_read_as_a_list() {
+        assert_eq!(
+            Tag::expected(),
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@ or saturation@"
+        );
+    }
+}
