@@ -43,6 +43,7 @@ use rayon::prelude::*;
 
 use crate::constraints::DistanceConstraints;
 use crate::error::Result;
+use crate::kernel::{self, Link, Projection};
 
 /// Colours with at least this many constraints are solved in parallel when
 /// the current rayon pool has more than one thread; smaller ones in place,
@@ -356,21 +357,16 @@ impl ColouredSweep {
                         continue;
                     }
                     let p = mv.particle as usize;
-                    let shift = inv_mass[p] * corr * n;
-                    if mv.is_b {
-                        block[p - lo] += shift;
-                    } else {
-                        block[p - lo] -= shift;
-                    }
+                    kernel::move_end(&mut block[p - lo], inv_mass[p], corr, &n, mv.is_b);
                 }
             });
     }
 }
 
 /// The correction `corr` (kg m, impulse × step) and previewed direction `n`
-/// of constraint `i`: `(len − rest − α̃ μ)/(k_a + k_b + α̃)`, `α̃ = α/h²`;
-/// `None` when both ends are static or the previewed ends coincide (no
-/// direction: the constraint waits for its neighbours for one sweep).
+/// of constraint `i` ([`kernel::Projection`]); `None` when both ends are
+/// static or the previewed ends coincide (the constraint waits for its
+/// neighbours for one sweep).
 #[inline]
 fn correction(
     constraints: &DistanceConstraints,
@@ -380,22 +376,13 @@ fn correction(
     mu: f64,
     inv_h2: f64,
 ) -> Option<(f64, Vector3<f64>)> {
-    let (a, b) = (constraints.a[i] as usize, constraints.b[i] as usize);
-    let w = inv_mass[a] + inv_mass[b];
-    let d = pred[a] - pred[b];
-    let len = d.norm();
-    if w == 0.0 || len <= f64::MIN_POSITIVE {
-        return None;
-    }
-    let alpha = constraints.compliance[i] * inv_h2;
-    Some((
-        (len - constraints.rest_length[i] - alpha * mu) / (w + alpha),
-        d / len,
-    ))
+    let link = Link::new(constraints, i, inv_h2);
+    Projection::at(&link, inv_mass[link.a], inv_mass[link.b], pred, mu)
+        .map(|p| (p.correction(), p.n))
 }
 
-/// One colour, constraint after constraint, in place: the same expressions
-/// as the two parallel passes, in the same order.
+/// One colour, constraint after constraint, in place ([`kernel::project`]):
+/// the same expressions as the two parallel passes, in the same order.
 fn colour_in_place(
     colour: &[u32],
     constraints: &DistanceConstraints,
@@ -405,23 +392,7 @@ fn colour_in_place(
     inv_h2: f64,
 ) {
     for &i in colour {
-        let i = i as usize;
-        let Some((corr, n)) = correction(constraints, i, inv_mass, pred, mu[i], inv_h2) else {
-            continue;
-        };
-        mu[i] += corr;
-        if corr == 0.0 {
-            continue;
-        }
-        let (a, b) = (constraints.a[i] as usize, constraints.b[i] as usize);
-        if inv_mass[a] != 0.0 {
-            let shift = inv_mass[a] * corr * n;
-            pred[a] -= shift;
-        }
-        if inv_mass[b] != 0.0 {
-            let shift = inv_mass[b] * corr * n;
-            pred[b] += shift;
-        }
+        kernel::project(constraints, i as usize, inv_mass, pred, mu, inv_h2);
     }
 }
 

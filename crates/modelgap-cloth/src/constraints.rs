@@ -6,9 +6,13 @@
 //! (kg m, see [`crate::newton`]) its error over a step of size `h` is
 //! `|c_a − c_b| − rest − α μ / h²` (the XPBD form). The solvers drive this
 //! error, relative to the rest length, below the stretch tolerance; for an
-//! inextensible constraint it is the relative stretch.
+//! inextensible constraint it is the relative stretch. The formulas of one
+//! constraint, which every solver shares, live in the crate's constraint
+//! kernel (`kernel.rs`).
 
 use nalgebra::Vector3;
+
+use crate::kernel::Link;
 
 /// Distance constraints `|c_a − c_b| = rest_length`, one per mesh edge,
 /// stored as one `Vec` per attribute (indices into a [`ParticleSet`](crate::ParticleSet)).
@@ -57,9 +61,8 @@ impl DistanceConstraints {
     /// (kg m) and `inv_h2 = 1/h²`; the relative stretch when inextensible.
     #[must_use]
     pub fn error(&self, i: usize, positions: &[Vector3<f64>], mu: f64, inv_h2: f64) -> f64 {
-        let d = positions[self.a[i] as usize] - positions[self.b[i] as usize];
-        let rest = self.rest_length[i];
-        (d.norm() - rest - self.compliance[i] * mu * inv_h2) / rest
+        let link = Link::new(self, i, inv_h2);
+        link.relative(link.value(link.length(positions), mu))
     }
 
     /// The largest `|error|` ([`error`](Self::error)) over all constraints;
@@ -104,8 +107,8 @@ impl DistanceConstraints {
     /// at the given positions (signed: positive when stretched).
     #[must_use]
     pub fn stretch(&self, i: usize, positions: &[Vector3<f64>]) -> f64 {
-        let d = positions[self.a[i] as usize] - positions[self.b[i] as usize];
-        (d.norm() - self.rest_length[i]) / self.rest_length[i]
+        let link = Link::new(self, i, 0.0);
+        link.stretch(link.length(positions))
     }
 
     /// The largest relative stretch or compression `| |c_a − c_b| / rest − 1 |`

@@ -28,12 +28,17 @@
 //! ```
 //!
 //! Modules: [`particles`] ([`ParticleSet`]), [`constraints`]
-//! ([`DistanceConstraints`]), [`mesh`] ([`GridCloth`], OBJ meshes, the
-//! vertex numbering), [`solver`] ([`SolverParams`], [`StepReport`], the
-//! Gauss–Seidel sweep), [`colouring`] (constraint colours, the coloured
-//! parallel sweep), [`strips`] (acyclic strips solved in linear time, the
-//! paper's acceleration), [`newton`] (the global solve), [`contact`]
-//! ([`Collider`]), [`world`] ([`ClothWorld`]), [`kinematic`] ([`PinPath`]:
+//! ([`DistanceConstraints`]), `kernel` (crate-private: the terms of one
+//! distance constraint — its length and direction, its compliant value, the
+//! impulse that satisfies it and its application — written once and used
+//! by every solver), [`mesh`] ([`GridCloth`], OBJ meshes, the
+//! vertex numbering), [`solver`] ([`SolverParams`], [`StepReport`],
+//! [`Fallback`], the Gauss–Seidel sweep), [`colouring`] (constraint colours,
+//! the coloured parallel sweep), [`strips`] (acyclic strips solved in linear
+//! time, the paper's acceleration), [`newton`] (the global solve), [`contact`]
+//! ([`Collider`]), [`world`] ([`ClothWorld`]; its step in named stages:
+//! check, preview, choose the solver, warm start, solve the constraints,
+//! commit, divergence check), [`kinematic`] ([`PinPath`]:
 //! pins that follow a path), [`markers`] ([`MarkerRecording`], marker CSV and
 //! MCAP files), [`scenes`] (the reference scenes), [`trajectory`] (running a
 //! scene, its recorded frames and Foxglove MCAP), [`forces`] (drag, wind,
@@ -47,6 +52,7 @@ pub mod contact;
 pub mod error;
 pub mod forces;
 pub mod hidden;
+mod kernel;
 pub mod kinematic;
 pub mod markers;
 pub mod mesh;
@@ -71,5 +77,5 @@ pub use mesh::{BuildMesh, ClothMesh, GridCloth, GridEdges};
 pub use model::{ClothModel, PredictSettings};
 pub use particles::{ParticleId, ParticleSet};
 pub use scenes::Scene;
-pub use solver::{Method, SolverParams, StepReport};
+pub use solver::{Fallback, Method, SolverParams, StepReport};
 pub use world::{ClothId, ClothWorld};

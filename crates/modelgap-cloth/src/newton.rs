@@ -177,6 +177,7 @@ use nalgebra::{Matrix3, Vector3};
 
 use crate::constraints::DistanceConstraints;
 use crate::contact::{Collider, ContactState};
+use crate::kernel::{Link, Separation};
 use crate::solver::{self, SolverParams};
 
 /// The proximal shift `ε` in `E = ε (k_a + k_b) + α/h²` (dimensionless:
@@ -233,9 +234,39 @@ pub const COMPRESSION_STIFFNESS: f64 = 0.0;
 
 const NONE: u32 = u32::MAX;
 
-/// Why the solver could not be built.
+/// Why the solver could not be built: faer's ordering, symbolic
+/// factorisation or scratch allocation failed, which it reports only for an
+/// index overflow or an allocation failure (no mesh the limits admit gets
+/// there). The world then runs Gauss–Seidel and says so
+/// ([`Fallback::NewtonUnavailable`](crate::solver::Fallback::NewtonUnavailable)).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct FactorFailed;
+
+#[cfg(test)]
+thread_local! {
+    /// Tests: [`NewtonSolver::new`] fails on this thread while set (see [`FailBuilds`]).
+    static FAIL_BUILDS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Tests: while this guard lives, [`NewtonSolver::new`] fails on this thread,
+/// so the world's Gauss–Seidel fallback can be tested (no input provokes it).
+#[cfg(test)]
+pub(crate) struct FailBuilds;
+
+#[cfg(test)]
+impl FailBuilds {
+    pub(crate) fn new() -> Self {
+        FAIL_BUILDS.set(true);
+        Self
+    }
+}
+
+#[cfg(test)]
+impl Drop for FailBuilds {
+    fn drop(&mut self) {
+        FAIL_BUILDS.set(false);
+    }
+}
 
 /// What one Newton solve did.
 #[derive(Clone, Copy, Debug, Default)]
@@ -357,6 +388,10 @@ impl NewtonSolver {
         constraints: &DistanceConstraints,
         inv_mass: &[f64],
     ) -> Result<Self, FactorFailed> {
+        #[cfg(test)]
+        if FAIL_BUILDS.get() {
+            return Err(FactorFailed);
+        }
         let n_particles = inv_mass.len();
         let m = constraints.len();
         let dof = fill_reducing_rows(constraints, inv_mass)?;
@@ -764,9 +799,12 @@ impl NewtonSolver {
             let n = cur.normals[c];
             self.factor_normals[c] = n;
             // E = ε (k_a + k_b) + α/h²: the proximal shift and the
-            // compliance (see REGULARISATION).
-            let e = REGULARISATION * (input.inv_mass[pa] + input.inv_mass[pb])
-                + cs.compliance[c] * input.inv_h2;
+            // compliance (see REGULARISATION), the kernel's weight.
+            let e = Link::new(cs, c, input.inv_h2).weight(
+                input.inv_mass[pa],
+                input.inv_mass[pb],
+                REGULARISATION,
+            );
             self.inv_e[c] = 1.0 / e;
             let mut block = n * n.transpose() * self.inv_e[c];
             // Compression enters with a bounded negative stiffness so that
@@ -931,18 +969,18 @@ fn evaluate(s: &mut State, input: &StepInput<'_>, mean_rest: f64) {
     let mut merit = 0.0;
     let mut max_stretch = 0.0_f64;
     for c in 0..cs.len() {
-        let (a, b) = (cs.a[c] as usize, cs.b[c] as usize);
-        let d = s.x[a] - s.x[b];
-        let len = d.norm();
-        if len > f64::MIN_POSITIVE {
-            s.normals[c] = d / len;
+        let link = Link::new(cs, c, input.inv_h2);
+        let Separation { len, n } = link.separation(&s.x);
+        // Coincident ends keep their last direction.
+        if let Some(n) = n {
+            s.normals[c] = n;
         }
         s.lengths[c] = len;
         let p = s.mu[c] * s.normals[c];
-        s.g[a] += p;
-        s.g[b] -= p;
-        s.c[c] = len - cs.rest_length[c] - cs.compliance[c] * s.mu[c] * input.inv_h2;
-        let rel = s.c[c] / cs.rest_length[c];
+        s.g[link.a] += p;
+        s.g[link.b] -= p;
+        s.c[c] = link.value(len, s.mu[c]);
+        let rel = link.relative(s.c[c]);
         merit += rel * rel;
         max_stretch = max_stretch.max(rel.abs());
         if rel.is_nan() {

@@ -37,6 +37,7 @@ use nalgebra::Vector3;
 
 use crate::constraints::DistanceConstraints;
 use crate::error::{ClothError, Result};
+use crate::kernel::{self, Link};
 
 /// How the constraint impulses of a step are computed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -193,17 +194,55 @@ pub struct StepReport {
     /// Numeric factorisations done (Newton only).
     pub factorizations: usize,
     /// Gauss–Seidel sweeps done because a Newton step failed even with a
-    /// fresh factor (Newton only; 0 when Newton worked throughout).
+    /// fresh factor (Newton only; 0 when Newton worked throughout). The step
+    /// still ran Newton; a step that ran no Newton at all says so in
+    /// [`fallback`](Self::fallback).
     pub fallback_sweeps: usize,
     /// Particles in contact with a collider during the step.
     pub n_contacts: usize,
     /// Deepest penetration into a collider at the end of the step (m).
     pub max_penetration: f64,
+    /// The method that computed the step's impulses: [`SolverParams::method`],
+    /// or [`Method::GaussSeidel`] when the step fell back to it (see
+    /// [`fallback`](Self::fallback)). Of merged reports, the last step's.
+    pub method_used: Method,
+    /// Why the step did not run [`SolverParams::method`]; `None` when it did.
+    /// Of merged reports, the first step's that fell back.
+    pub fallback: Option<Fallback>,
+}
+
+/// Why a step ran [`Method::GaussSeidel`] instead of [`SolverParams::method`]
+/// ([`StepReport::fallback`]). Only [`Method::Newton`] falls back; the sweep
+/// is the serial one, or the coloured one with [`SolverParams::coloured_sweep`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Fallback {
+    /// The Newton solver could not be built for this topology: its
+    /// fill-reducing ordering, symbolic factorisation or scratch memory failed
+    /// (faer reports only an index overflow or an allocation failure). It is
+    /// tried again at the next step.
+    NewtonUnavailable,
+    /// The world has no constraints: nothing for Newton to solve; the
+    /// Gauss–Seidel loop only resolved contacts.
+    NoConstraints,
+}
+
+impl std::fmt::Display for Fallback {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::NewtonUnavailable => {
+                "the Newton solver could not be built (ordering, symbolic factorisation or \
+                 memory); Gauss-Seidel ran instead"
+            }
+            Self::NoConstraints => "no constraints to solve; Gauss-Seidel resolved the contacts",
+        })
+    }
 }
 
 impl StepReport {
     /// Combines the reports of consecutive steps: summed work, worst error,
-    /// converged only if every step converged.
+    /// converged only if every step converged, the last step's method and the
+    /// first fallback.
     #[must_use]
     pub fn merge(self, next: Self) -> Self {
         Self {
@@ -218,6 +257,8 @@ impl StepReport {
             fallback_sweeps: self.fallback_sweeps + next.fallback_sweeps,
             n_contacts: self.n_contacts.max(next.n_contacts),
             max_penetration: self.max_penetration.max(next.max_penetration),
+            method_used: next.method_used,
+            fallback: self.fallback.or(next.fallback),
         }
     }
 }
@@ -230,28 +271,24 @@ pub(crate) fn apply_impulses(
     mu: &[f64],
     pred: &mut [Vector3<f64>],
 ) {
-    #[allow(clippy::needless_range_loop)] // columns indexed together
-    for i in 0..constraints.len() {
-        if mu[i] == 0.0 {
+    for (i, &m) in mu.iter().enumerate().take(constraints.len()) {
+        if m == 0.0 {
             continue;
         }
-        let (a, b) = (constraints.a[i] as usize, constraints.b[i] as usize);
-        let d = pred[a] - pred[b];
-        let len = d.norm();
-        if len <= f64::MIN_POSITIVE {
-            continue;
+        let link = Link::new(constraints, i, 0.0);
+        if let Some(n) = link.separation(pred).n {
+            let k = (inv_mass[link.a], inv_mass[link.b]);
+            kernel::apply(pred, (link.a, link.b), k, m, &n);
         }
-        let n = d / len;
-        pred[a] -= inv_mass[a] * mu[i] * n;
-        pred[b] += inv_mass[b] * mu[i] * n;
     }
 }
 
 /// One Gauss–Seidel sweep over all constraints: each constraint's predicted
 /// error is removed by equal and opposite impulses along its previewed
-/// direction. `mu` accumulates each constraint's impulse × step (kg m);
-/// `inv_h2 = 1/h²` enters only through compliant constraints, whose
-/// correction is `(len − rest − α̃ μ)/(k_a + k_b + α̃)`, `α̃ = α/h²` (XPBD).
+/// direction ([`kernel::project`]). `mu` accumulates each constraint's
+/// impulse × step (kg m); `inv_h2 = 1/h²` enters only through compliant
+/// constraints, whose correction is `(len − rest − α̃ μ)/(k_a + k_b + α̃)`,
+/// `α̃ = α/h²` (XPBD).
 pub(crate) fn gauss_seidel_sweep(
     constraints: &DistanceConstraints,
     inv_mass: &[f64],
@@ -259,24 +296,8 @@ pub(crate) fn gauss_seidel_sweep(
     mu: &mut [f64],
     inv_h2: f64,
 ) {
-    #[allow(clippy::needless_range_loop)] // columns indexed together
     for i in 0..constraints.len() {
-        let (a, b) = (constraints.a[i] as usize, constraints.b[i] as usize);
-        let (ka, kb) = (inv_mass[a], inv_mass[b]);
-        let w = ka + kb;
-        let d = pred[a] - pred[b];
-        let len = d.norm();
-        // Coincident predictions have no direction: leave this constraint to
-        // its neighbours for one sweep rather than divide by zero.
-        if w == 0.0 || len <= f64::MIN_POSITIVE {
-            continue;
-        }
-        let n = d / len;
-        let alpha = constraints.compliance[i] * inv_h2;
-        let corr = (len - constraints.rest_length[i] - alpha * mu[i]) / (w + alpha);
-        pred[a] -= ka * corr * n;
-        pred[b] += kb * corr * n;
-        mu[i] += corr;
+        kernel::project(constraints, i, inv_mass, pred, mu, inv_h2);
     }
 }
 
@@ -289,18 +310,18 @@ pub(crate) fn velocity_sweep(
     velocities: &mut [Vector3<f64>],
 ) {
     for i in 0..constraints.len() {
-        let (a, b) = (constraints.a[i] as usize, constraints.b[i] as usize);
-        let (ka, kb) = (inv_mass[a], inv_mass[b]);
-        let w = ka + kb;
-        let d = positions[a] - positions[b];
-        let len = d.norm();
-        if w == 0.0 || len <= f64::MIN_POSITIVE {
+        let link = Link::new(constraints, i, 0.0);
+        let k = (inv_mass[link.a], inv_mass[link.b]);
+        let w = k.0 + k.1;
+        let Some(n) = link.separation(positions).n else {
+            continue;
+        };
+        if w == 0.0 {
             continue;
         }
-        let n = d / len;
-        let p = (velocities[a] - velocities[b]).dot(&n) / w;
-        velocities[a] -= ka * p * n;
-        velocities[b] += kb * p * n;
+        let ends = (link.a, link.b);
+        let p = kernel::velocity_impulse(velocities, ends, w, &n);
+        kernel::apply(velocities, ends, k, p, &n);
     }
 }
 

@@ -95,6 +95,7 @@ use nalgebra::Vector3;
 
 use crate::constraints::DistanceConstraints;
 use crate::error::{ClothError, Result};
+use crate::kernel::{self, Link, Projection};
 
 /// A strip grows only along a constraint that turns from its last one by at
 /// most this angle (degrees), at the positions the decomposition was built
@@ -386,26 +387,33 @@ impl StripSweep {
             &mut self.off[..l],
             &mut self.rhs[..l],
         );
-        // Assemble along the current previewed directions.
+        // Assemble along the current previewed directions: each row's
+        // diagonal, right-hand side and direction are the kernel's projection
+        // of its constraint.
         for t in 0..l {
             let i = edges[t] as usize;
-            let (q0, q1) = (nodes[t] as usize, nodes[t + 1] as usize);
-            let w = inv_mass[q0] + inv_mass[q1];
-            let d = pred[q1] - pred[q0];
-            let len = d.norm();
-            // A constraint with no direction (coincident predictions) or no
-            // dynamic end is left out of this solve: its row becomes δμ = 0
-            // and, its direction zero, it couples to nothing.
-            if w == 0.0 || len <= f64::MIN_POSITIVE {
-                dir[t] = Vector3::zeros();
-                diag[t] = 1.0;
-                rhs[t] = 0.0;
-                continue;
+            let link = Link::new(constraints, i, inv_h2);
+            match Projection::at(&link, inv_mass[link.a], inv_mass[link.b], pred, mu[i]) {
+                Some(p) => {
+                    // The kernel's `n` points from `b` to `a`, the chain's
+                    // `u_t` from `q_t` to `q_{t+1}` (negation is exact).
+                    dir[t] = if link.a == nodes[t + 1] as usize {
+                        p.n
+                    } else {
+                        -p.n
+                    };
+                    diag[t] = p.weight;
+                    rhs[t] = p.value;
+                }
+                // A constraint with no direction (coincident predictions) or
+                // no dynamic end is left out of this solve: its row becomes
+                // δμ = 0 and, its direction zero, it couples to nothing.
+                None => {
+                    dir[t] = Vector3::zeros();
+                    diag[t] = 1.0;
+                    rhs[t] = 0.0;
+                }
             }
-            let alpha = constraints.compliance[i] * inv_h2;
-            dir[t] = d / len;
-            diag[t] = w + alpha;
-            rhs[t] = len - constraints.rest_length[i] - alpha * mu[i];
         }
         for t in 0..l.saturating_sub(1) {
             off[t] = -inv_mass[nodes[t + 1] as usize] * dir[t].dot(&dir[t + 1]);
@@ -419,7 +427,7 @@ impl StripSweep {
                 rhs[t] -= factor * rhs[t - 1];
             }
             if !(diag[t] > PIVOT_FLOOR * entry && diag[t].is_finite() && rhs[t].is_finite()) {
-                project_one_by_one(edges, nodes, constraints, inv_mass, pred, mu, inv_h2);
+                project_one_by_one(edges, constraints, inv_mass, pred, mu, inv_h2);
                 return;
             }
         }
@@ -428,49 +436,36 @@ impl StripSweep {
             rhs[t] = (rhs[t] - off[t] * rhs[t + 1]) / diag[t];
         }
         if rhs.iter().any(|x| !x.is_finite()) {
-            project_one_by_one(edges, nodes, constraints, inv_mass, pred, mu, inv_h2);
+            project_one_by_one(edges, constraints, inv_mass, pred, mu, inv_h2);
             return;
         }
-        // Equal and opposite impulses along the directions solved for.
+        // Equal and opposite impulses along the directions solved for: `u_t`
+        // points from `q_t` to `q_{t+1}`, so `q_{t+1}` is the kernel's first end.
         for t in 0..l {
             let delta = rhs[t];
             if delta == 0.0 {
                 continue;
             }
             let (q0, q1) = (nodes[t] as usize, nodes[t + 1] as usize);
-            pred[q0] += inv_mass[q0] * delta * dir[t];
-            pred[q1] -= inv_mass[q1] * delta * dir[t];
+            let k = (inv_mass[q1], inv_mass[q0]);
+            kernel::apply(pred, (q1, q0), k, delta, &dir[t]);
             mu[edges[t] as usize] += delta;
         }
     }
 }
 
 /// The fallback of a strip whose elimination failed: the serial sweep's
-/// projection, constraint by constraint along the strip.
+/// projection ([`kernel::project`]), constraint by constraint along the strip.
 fn project_one_by_one(
     edges: &[u32],
-    nodes: &[u32],
     constraints: &DistanceConstraints,
     inv_mass: &[f64],
     pred: &mut [Vector3<f64>],
     mu: &mut [f64],
     inv_h2: f64,
 ) {
-    for (t, &i) in edges.iter().enumerate() {
-        let i = i as usize;
-        let (q0, q1) = (nodes[t] as usize, nodes[t + 1] as usize);
-        let (k0, k1) = (inv_mass[q0], inv_mass[q1]);
-        let d = pred[q1] - pred[q0];
-        let len = d.norm();
-        if k0 + k1 == 0.0 || len <= f64::MIN_POSITIVE {
-            continue;
-        }
-        let u = d / len;
-        let alpha = constraints.compliance[i] * inv_h2;
-        let corr = (len - constraints.rest_length[i] - alpha * mu[i]) / (k0 + k1 + alpha);
-        pred[q0] += k0 * corr * u;
-        pred[q1] -= k1 * corr * u;
-        mu[i] += corr;
+    for &i in edges {
+        kernel::project(constraints, i as usize, inv_mass, pred, mu, inv_h2);
     }
 }
 

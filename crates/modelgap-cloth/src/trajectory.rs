@@ -136,6 +136,9 @@ pub struct RunStats {
     pub max_iterations: usize,
     /// Steps that ran out of iterations before every constraint held.
     pub unconverged_steps: usize,
+    /// Steps that ran Gauss–Seidel instead of the scene's method because it
+    /// could not run ([`StepReport::fallback`](crate::StepReport::fallback)).
+    pub fallback_steps: usize,
 }
 
 impl RunStats {
@@ -280,6 +283,7 @@ pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<ClothRun> {
         stats.max_iterations = stats.max_iterations.max(report.iterations);
         stats.max_stretch = stats.max_stretch.max(report.max_stretch);
         stats.unconverged_steps += usize::from(!report.converged);
+        stats.fallback_steps += usize::from(report.fallback.is_some());
         if step % stride == 0 || step == n_steps {
             record(step, sw.positions());
         }
@@ -468,4 +472,27 @@ fn scene_update(
             "models": [],
         }],
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenes;
+
+    /// Issue 12: a run counts the steps that fell back to Gauss–Seidel.
+    #[test]
+    fn run_stats_count_the_steps_that_fell_back() {
+        let scene = scenes::corner().resized(6, 6).unwrap();
+        let options = RunOptions {
+            duration: Some(5.0 * scene.dt),
+            markers: MarkerSelection::None,
+            ..RunOptions::default()
+        };
+        let normal = run_scene(&scene, &options).unwrap().stats;
+        assert_eq!((normal.steps, normal.fallback_steps), (5, 0));
+        // Newton's solver cannot be built on this thread (see `newton::FailBuilds`).
+        let _fail = crate::newton::FailBuilds::new();
+        let fell_back = run_scene(&scene, &options).unwrap().stats;
+        assert_eq!((fell_back.steps, fell_back.fallback_steps), (5, 5));
+    }
 }

@@ -1,18 +1,29 @@
 //! The cloth world: particles, constraints, colliders, and the step.
+//!
+//! [`ClothWorld::step`] (in `world/step.rs`) reads top to bottom as its
+//! stages, each a small function: check the input, preview the free motion,
+//! choose and prepare the solver (falling back to Gauss–Seidel, and saying
+//! so, when Newton cannot run), warm-start the impulses, solve the
+//! constraints (Newton's global solve, or serial, coloured or strip sweeps
+//! until they hold), commit positions and velocities (with the velocity part
+//! and contact velocities), and check for divergence. The solvers share one
+//! constraint kernel (`kernel.rs`).
+
+mod step;
 
 use std::ops::Range;
 
 use nalgebra::Vector3;
 
-use crate::colouring::{self, ColouredSweep};
+use crate::colouring::ColouredSweep;
 use crate::constraints::DistanceConstraints;
-use crate::contact::{self, Collider, ColliderId, ContactState};
+use crate::contact::{Collider, ColliderId, ContactState};
 use crate::error::{ClothError, Result};
 use crate::kinematic::{KinematicPin, PinPath};
 use crate::mesh::{BuildMesh, ClothMesh};
-use crate::newton::{NewtonSolver, StepInput};
+use crate::newton::NewtonSolver;
 use crate::particles::{ParticleId, ParticleSet};
-use crate::solver::{self, Method, SolverParams, StepReport};
+use crate::solver::{SolverParams, StepReport};
 use crate::strips::StripSweep;
 
 /// The id of a cloth in a [`ClothWorld`], handed out by [`ClothWorld::add_cloth`].
@@ -349,228 +360,6 @@ impl ClothWorld {
         self.workspace.last_dt = None;
     }
 
-    /// Advances the world by `dt` seconds.
-    ///
-    /// # Errors
-    /// [`ClothError::BadTimeStep`] for a non-positive or non-finite `dt`,
-    /// [`ClothError::BadParameter`] for solver parameters out of range
-    /// ([`SolverParams::check`]: gravity past [`MAX_GRAVITY`](crate::solver::MAX_GRAVITY),
-    /// a non-positive tolerance), [`ClothError::NonFinite`] when a position or velocity is
-    /// NaN or infinite before the step (set through [`particles_mut`](Self::particles_mut)),
-    /// [`ClothError::Diverged`] when the step ends with a non-finite position, velocity or
-    /// stretch (the world then holds that state). Not converging within the iteration
-    /// limit is reported in the [`StepReport`], not an error.
-    pub fn step(&mut self, dt: f64) -> Result<StepReport> {
-        if !(dt > 0.0 && dt.is_finite()) {
-            return Err(ClothError::BadTimeStep { dt });
-        }
-        self.params.check()?;
-        self.check_finite()?;
-        let h = dt;
-        let g = self.params.gravity;
-        let n = self.particles.len();
-        let ws = &mut self.workspace;
-        let ps = &mut self.particles;
-        let cs = &self.constraints;
-        ws.pred.clear();
-        ws.contacts.clear();
-        ws.contacts.resize(n, ContactState::default());
-        let forces = &self.external_forces;
-        for (i, f) in forces.iter().enumerate().take(n) {
-            let x = ps.positions[i];
-            ws.pred.push(if ps.inv_mass[i] > 0.0 {
-                let a = g + f * ps.inv_mass[i];
-                x + h * ps.velocities[i] + 0.5 * h * h * a
-            } else {
-                x
-            });
-        }
-        // Kinematic pins end the step on their paths; the constraints see them there.
-        let t_end = self.time + h;
-        for pin in &self.kinematic {
-            ws.pred[pin.particle.index()] = pin.path.at(t_end);
-        }
-        // Warm start: last step's impulses, which scale with the step squared.
-        ws.mu.resize(cs.len(), 0.0);
-        ws.free.clone_from(&ws.pred);
-        let newton = self.params.method == Method::Newton;
-        match (self.params.warm_start, ws.last_dt) {
-            (true, Some(last)) => {
-                // Gauss–Seidel keeps them only when they help: in a nearly
-                // straight row the impulses are huge and sensitive to
-                // direction, and replaying them along new directions can do
-                // more harm than good. Newton always starts from them.
-                let scale = (h / last) * (h / last);
-                ws.mu.iter_mut().for_each(|m| *m *= scale);
-                if newton {
-                    // Newton starts from these impulses and the free preview
-                    // plus its last step's correction (see `newton`; applying
-                    // the impulses to the positions first, one after the
-                    // other, can stretch a swinging cloth by 100 %).
-                    if ws.mu.iter().any(|m| !m.is_finite()) {
-                        ws.mu.fill(0.0);
-                    }
-                } else {
-                    let cold = cs.max_stretch(&ws.pred);
-                    solver::apply_impulses(cs, &ps.inv_mass, &ws.mu, &mut ws.pred);
-                    let warm = cs.max_stretch(&ws.pred);
-                    if warm.is_nan() || warm >= cold {
-                        ws.pred.clone_from(&ws.free);
-                        ws.mu.fill(0.0);
-                    }
-                }
-            }
-            _ => ws.mu.fill(0.0),
-        }
-        let tol = self.params.stretch_tolerance;
-        let contact_tol = self.params.contact_tolerance;
-        let mut report = StepReport::default();
-        if newton && ws.newton.is_none() && !cs.is_empty() {
-            ws.newton = NewtonSolver::new(cs, &ps.inv_mass).ok();
-        }
-        if newton && let Some(global) = ws.newton.as_mut() {
-            let input = StepInput {
-                constraints: cs,
-                inv_mass: &ps.inv_mass,
-                start: &ps.positions,
-                free: &ws.free,
-                colliders: &self.colliders,
-                params: &self.params,
-                inv_h2: 1.0 / (h * h),
-            };
-            let warm = match (self.params.warm_start, ws.last_dt) {
-                (true, Some(last)) => Some((h / last) * (h / last)),
-                _ => None,
-            };
-            let out = global.solve(&input, &mut ws.pred, &mut ws.mu, &mut ws.contacts, warm);
-            report.iterations = out.iterations;
-            report.factorizations = out.factorizations;
-            report.fallback_sweeps = out.fallback_sweeps;
-            report.converged = out.converged;
-            report.max_stretch = out.max_stretch;
-        } else {
-            let inv_h2 = 1.0 / (h * h);
-            // The coloured sweep, its colouring rebuilt when a particle
-            // turned static or dynamic since it was made.
-            let mut coloured = None;
-            let mut strips = None;
-            if self.params.method == Method::Strips {
-                let fits = ws.strips.as_ref().is_some_and(|s| s.fits(cs, &ps.inv_mass));
-                if !fits {
-                    ws.strips = Some(StripSweep::new(cs, &ps.inv_mass, &ps.positions)?);
-                }
-                strips = ws.strips.as_mut();
-            } else if self.params.coloured_sweep {
-                let fits = ws
-                    .coloured
-                    .as_ref()
-                    .is_some_and(|s| s.fits(cs, &ps.inv_mass));
-                if !fits {
-                    ws.coloured = Some(ColouredSweep::new(cs, &ps.inv_mass)?);
-                }
-                coloured = ws.coloured.as_mut();
-            }
-            loop {
-                let penetration = contact::project_contacts(
-                    &self.colliders,
-                    &ps.positions,
-                    &ps.inv_mass,
-                    &mut ws.pred,
-                    &mut ws.contacts,
-                );
-                let stretch = match coloured {
-                    Some(_) => colouring::max_error(cs, &ws.pred, &ws.mu, inv_h2),
-                    None => cs.max_error(&ws.pred, &ws.mu, inv_h2),
-                };
-                report.max_stretch = stretch;
-                if stretch <= tol && penetration <= contact_tol {
-                    report.converged = true;
-                    break;
-                }
-                if report.iterations >= self.params.max_iterations || stretch.is_nan() {
-                    break;
-                }
-                let (k, pred, mu) = (&ps.inv_mass, &mut ws.pred, &mut ws.mu);
-                match (strips.as_deref_mut(), coloured.as_deref_mut()) {
-                    (Some(sweep), _) => sweep.sweep(cs, k, pred, mu, inv_h2),
-                    (None, Some(sweep)) => sweep.sweep(cs, k, pred, mu, inv_h2),
-                    (None, None) => solver::gauss_seidel_sweep(cs, k, pred, mu, inv_h2),
-                }
-                report.iterations += 1;
-            }
-        }
-        report.max_penetration = contact::max_penetration(&self.colliders, &ps.inv_mass, &ws.pred);
-        // Commit: positions from the preview, velocities of a particle that
-        // received its impulses at the start of the step under constant force.
-        for (i, f) in forces.iter().enumerate().take(n) {
-            if ps.inv_mass[i] > 0.0 {
-                let a = g + f * ps.inv_mass[i];
-                ps.velocities[i] = (ws.pred[i] - ps.positions[i]) / h + 0.5 * h * a;
-                ps.positions[i] = ws.pred[i];
-            } else {
-                ps.velocities[i] = Vector3::zeros();
-            }
-        }
-        for pin in &self.kinematic {
-            let i = pin.particle.index();
-            let end = pin.path.at(t_end);
-            ps.velocities[i] = (end - ps.positions[i]) / h;
-            ps.positions[i] = end;
-        }
-        for _ in 0..self.params.velocity_iterations {
-            solver::velocity_sweep(cs, &ps.inv_mass, &ps.positions, &mut ps.velocities);
-        }
-        report.n_contacts = contact::contact_velocities(&mut ps.velocities, &ws.contacts);
-        ws.last_dt = Some(h);
-        self.time = t_end;
-        self.n_steps += 1;
-        self.check_diverged(&report)?;
-        Ok(report)
-    }
-
-    /// [`ClothError::Diverged`] when the step just taken left a non-finite position,
-    /// velocity or stretch.
-    fn check_diverged(&self, report: &StepReport) -> Result<()> {
-        let diverged = |quantity, particle: Option<usize>, value: String| {
-            Err(ClothError::Diverged {
-                step: self.n_steps,
-                time: self.time,
-                quantity,
-                particle: particle.map(|i| i as u32),
-                value,
-            })
-        };
-        let ps = &self.particles;
-        for (quantity, column) in [("position", &ps.positions), ("velocity", &ps.velocities)] {
-            if let Some((i, p)) = column
-                .iter()
-                .enumerate()
-                .find(|(_, p)| !p.iter().all(|c| c.is_finite()))
-            {
-                return diverged(quantity, Some(i), format!("[{}, {}, {}]", p.x, p.y, p.z));
-            }
-        }
-        if !report.max_stretch.is_finite() {
-            let cs = &self.constraints;
-            // Finite positions whose differences overflow: name the edge.
-            let edge = (0..cs.len()).find(|&k| !cs.stretch(k, &ps.positions).is_finite());
-            return match edge {
-                Some(k) => diverged(
-                    "stretch",
-                    None,
-                    format!(
-                        "{} on edge {}-{}",
-                        cs.stretch(k, &ps.positions),
-                        cs.a[k],
-                        cs.b[k]
-                    ),
-                ),
-                None => diverged("stretch", None, report.max_stretch.to_string()),
-            };
-        }
-        Ok(())
-    }
-
     /// Advances the world by `steps` steps of `dt` seconds; the report merges
     /// them (summed iterations, worst stretch, converged if all converged).
     ///
@@ -585,78 +374,5 @@ impl ClothWorld {
             total = total.merge(self.step(dt)?);
         }
         Ok(total)
-    }
-
-    fn check_finite(&self) -> Result<()> {
-        let ps = &self.particles;
-        for (what, column) in [("position", &ps.positions), ("velocity", &ps.velocities)] {
-            for (i, p) in column.iter().enumerate() {
-                if !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()) {
-                    return Err(ClothError::NonFinite {
-                        particle: i as u32,
-                        what,
-                        x: p.x,
-                        y: p.y,
-                        z: p.z,
-                    });
-                }
-            }
-        }
-        Ok(())
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::mesh::GridCloth;
-
-    /// Issue 11: a step must never end `Ok` with a NaN or infinite state.
-    #[test]
-    fn a_non_finite_state_after_a_step_names_the_quantity_and_the_particle() {
-        let mut world = ClothWorld::new(SolverParams::default());
-        world.add_cloth(GridCloth::new(3, 3, 0.1).pin(0)).unwrap();
-        world.step(0.01).unwrap();
-        let finite = StepReport::default();
-        assert!(world.check_diverged(&finite).is_ok());
-        world.particles_mut().velocities[5] = Vector3::new(0.0, 0.0, f64::INFINITY);
-        let err = world.check_diverged(&finite).unwrap_err();
-        assert_eq!(
-            err.to_string(),
-            "simulation diverged at step 1 (t = 0.01 s): expected a finite velocity of \
-             particle 5, found [0, 0, inf]"
-        );
-        world.particles_mut().positions[4].y = f64::NAN;
-        let err = world.check_diverged(&finite).unwrap_err();
-        assert!(
-            matches!(
-                err,
-                ClothError::Diverged {
-                    step: 1,
-                    quantity: "position",
-                    particle: Some(4),
-                    ..
-                }
-            ),
-            "{err}"
-        );
-        let mut world = ClothWorld::new(SolverParams::default());
-        world.add_cloth(GridCloth::new(3, 3, 0.1).pin(0)).unwrap();
-        let overflowed = StepReport {
-            max_stretch: f64::INFINITY,
-            ..StepReport::default()
-        };
-        let err = world.check_diverged(&overflowed).unwrap_err();
-        assert!(
-            matches!(
-                err,
-                ClothError::Diverged {
-                    quantity: "stretch",
-                    particle: None,
-                    ..
-                }
-            ),
-            "{err}"
-        );
     }
 }

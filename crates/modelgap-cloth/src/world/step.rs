@@ -1,0 +1,501 @@
+//! [`ClothWorld::step`] in named stages, one small function each, in order:
+//! `check_step` → `preview` → `prepare_solver` → `warm_start` →
+//! `solve_constraints` → `commit` → `check_diverged`.
+
+use nalgebra::Vector3;
+
+use super::ClothWorld;
+use crate::colouring::{self, ColouredSweep};
+use crate::contact::{self, ContactState};
+use crate::error::{ClothError, Result};
+use crate::newton::{NewtonSolver, StepInput};
+use crate::solver::{self, Fallback, Method, StepReport};
+use crate::strips::StripSweep;
+
+/// The constraint solver of one step (see [`ClothWorld::prepare_solver`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Solver {
+    /// [`Method::Newton`]: the global solve.
+    Newton,
+    /// [`Method::GaussSeidel`], in constraint order.
+    Serial,
+    /// [`Method::GaussSeidel`] colour by colour
+    /// ([`SolverParams::coloured_sweep`](crate::SolverParams::coloured_sweep)).
+    Coloured,
+    /// [`Method::Strips`].
+    Strips,
+}
+
+impl Solver {
+    /// The method this solver is.
+    fn method(self) -> Method {
+        match self {
+            Self::Newton => Method::Newton,
+            Self::Serial | Self::Coloured => Method::GaussSeidel,
+            Self::Strips => Method::Strips,
+        }
+    }
+}
+
+/// The solver a step runs, and why it is not the method asked for.
+#[derive(Clone, Copy, Debug)]
+struct SolverChoice {
+    solver: Solver,
+    fallback: Option<Fallback>,
+}
+
+impl ClothWorld {
+    /// Advances the world by `dt` seconds.
+    ///
+    /// The step, stage by stage (each a small private function): `check_step`
+    /// → `preview` → `prepare_solver` → `warm_start` → `solve_constraints` →
+    /// `commit` → `check_diverged` (see the [module docs](crate::world)).
+    ///
+    /// # Errors
+    /// [`ClothError::BadTimeStep`] for a non-positive or non-finite `dt`,
+    /// [`ClothError::BadParameter`] for solver parameters out of range
+    /// ([`SolverParams::check`](crate::SolverParams::check): gravity past
+    /// [`MAX_GRAVITY`](crate::solver::MAX_GRAVITY), a non-positive tolerance),
+    /// [`ClothError::NonFinite`] when a position or velocity is NaN or infinite before the
+    /// step (set through [`particles_mut`](Self::particles_mut)), [`ClothError::Diverged`]
+    /// when the step ends with a non-finite position, velocity or stretch (the world then
+    /// holds that state). Not converging within the iteration limit is reported in the
+    /// [`StepReport`], not an error; so is a step that ran Gauss–Seidel because Newton
+    /// could not ([`StepReport::fallback`]).
+    pub fn step(&mut self, dt: f64) -> Result<StepReport> {
+        self.check_step(dt)?;
+        let t_end = self.time + dt;
+        self.preview(dt, t_end);
+        let choice = self.prepare_solver()?;
+        self.warm_start(dt, choice.solver);
+        let mut report = self.solve_constraints(dt, choice);
+        self.commit(dt, t_end, &mut report);
+        self.check_diverged(&report)?;
+        Ok(report)
+    }
+
+    /// Stage 1: a positive finite step size, parameters in range
+    /// ([`SolverParams::check`](crate::SolverParams::check)), a finite state
+    /// ([`check_finite`](Self::check_finite)).
+    fn check_step(&self, dt: f64) -> Result<()> {
+        if !(dt > 0.0 && dt.is_finite()) {
+            return Err(ClothError::BadTimeStep { dt });
+        }
+        self.params.check()?;
+        self.check_finite()
+    }
+
+    /// Stage 2: external forces and the preview. Gravity and the external
+    /// forces are constant over the step, so each dynamic particle's free
+    /// end-of-step position is `c + h v + h²/2 (g + F/m)`; a kinematic pin is
+    /// at its path's end-of-step position (the constraints see it there).
+    /// The preview is kept as the free one (Newton starts from it, the warm
+    /// start falls back to it), and the contacts are cleared.
+    fn preview(&mut self, h: f64, t_end: f64) {
+        let g = self.params.gravity;
+        let n = self.particles.len();
+        let (ws, ps) = (&mut self.workspace, &self.particles);
+        ws.pred.clear();
+        ws.contacts.clear();
+        ws.contacts.resize(n, ContactState::default());
+        for (i, f) in self.external_forces.iter().enumerate().take(n) {
+            let x = ps.positions[i];
+            ws.pred.push(if ps.inv_mass[i] > 0.0 {
+                let a = g + f * ps.inv_mass[i];
+                x + h * ps.velocities[i] + 0.5 * h * h * a
+            } else {
+                x
+            });
+        }
+        for pin in &self.kinematic {
+            ws.pred[pin.particle.index()] = pin.path.at(t_end);
+        }
+        ws.free.clone_from(&ws.pred);
+    }
+
+    /// Stage 3: the solver of this step and what it needs for this topology,
+    /// built once and kept until [`topology_changed`](Self::topology_changed):
+    /// Newton's pattern and ordering, the colouring, or the strips. When
+    /// [`Method::Newton`] cannot run (no constraints, or its solver cannot be
+    /// built), the step falls back to Gauss–Seidel and the choice says why.
+    ///
+    /// # Errors
+    /// The colouring's or the strips' ([`ClothError::VertexOutOfRange`] for a
+    /// constraint past the particles).
+    fn prepare_solver(&mut self) -> Result<SolverChoice> {
+        let ws = &mut self.workspace;
+        let (cs, ps) = (&self.constraints, &self.particles);
+        let mut fallback = None;
+        if self.params.method == Method::Newton {
+            if cs.is_empty() {
+                fallback = Some(Fallback::NoConstraints);
+            } else {
+                if ws.newton.is_none() {
+                    ws.newton = NewtonSolver::new(cs, &ps.inv_mass).ok();
+                }
+                if ws.newton.is_some() {
+                    return Ok(SolverChoice {
+                        solver: Solver::Newton,
+                        fallback: None,
+                    });
+                }
+                fallback = Some(Fallback::NewtonUnavailable);
+            }
+        }
+        // The colouring or strips are rebuilt when a particle turned static
+        // or dynamic since they were made.
+        let solver = if self.params.method == Method::Strips {
+            if !ws.strips.as_ref().is_some_and(|s| s.fits(cs, &ps.inv_mass)) {
+                ws.strips = Some(StripSweep::new(cs, &ps.inv_mass, &ps.positions)?);
+            }
+            Solver::Strips
+        } else if self.params.coloured_sweep {
+            if !ws
+                .coloured
+                .as_ref()
+                .is_some_and(|s| s.fits(cs, &ps.inv_mass))
+            {
+                ws.coloured = Some(ColouredSweep::new(cs, &ps.inv_mass)?);
+            }
+            Solver::Coloured
+        } else {
+            Solver::Serial
+        };
+        Ok(SolverChoice { solver, fallback })
+    }
+
+    /// Stage 4: the warm start. The impulses start from last step's, which
+    /// scale with the step squared. Newton always starts from them (and from
+    /// its last correction, see [`crate::newton`]); the sweeps keep them only
+    /// when applying them lowers the largest stretch: in a nearly straight
+    /// row the impulses are huge and sensitive to direction, and replaying
+    /// them along new directions can do more harm than good. Without a
+    /// previous step (or with
+    /// [`SolverParams::warm_start`](crate::SolverParams::warm_start) off) they
+    /// start at 0.
+    fn warm_start(&mut self, h: f64, solver: Solver) {
+        let ws = &mut self.workspace;
+        let cs = &self.constraints;
+        ws.mu.resize(cs.len(), 0.0);
+        let (true, Some(last)) = (self.params.warm_start, ws.last_dt) else {
+            ws.mu.fill(0.0);
+            return;
+        };
+        let scale = (h / last) * (h / last);
+        ws.mu.iter_mut().for_each(|m| *m *= scale);
+        if solver == Solver::Newton {
+            // Applying the impulses to the positions first, one after the
+            // other, can stretch a swinging cloth by 100 %: Newton starts
+            // from the free preview plus its last step's correction.
+            if ws.mu.iter().any(|m| !m.is_finite()) {
+                ws.mu.fill(0.0);
+            }
+        } else {
+            let cold = cs.max_stretch(&ws.pred);
+            solver::apply_impulses(cs, &self.particles.inv_mass, &ws.mu, &mut ws.pred);
+            let warm = cs.max_stretch(&ws.pred);
+            if warm.is_nan() || warm >= cold {
+                ws.pred.clone_from(&ws.free);
+                ws.mu.fill(0.0);
+            }
+        }
+    }
+
+    /// Stage 5: solve the constraints (and contacts) with the chosen solver:
+    /// Newton's global solve, or sweeps until every constraint holds. The
+    /// report says which method ran and why it was not the one asked for.
+    fn solve_constraints(&mut self, h: f64, choice: SolverChoice) -> StepReport {
+        let mut report = match choice.solver {
+            Solver::Newton => self.solve_newton(h),
+            sweep => self.sweep_until_converged(h, sweep),
+        };
+        report.method_used = choice.solver.method();
+        report.fallback = choice.fallback;
+        report.max_penetration = contact::max_penetration(
+            &self.colliders,
+            &self.particles.inv_mass,
+            &self.workspace.pred,
+        );
+        report
+    }
+
+    /// Newton's global solve of the preview ([`crate::newton`]), contacts included.
+    fn solve_newton(&mut self, h: f64) -> StepReport {
+        let ws = &mut self.workspace;
+        let ps = &self.particles;
+        let Some(global) = ws.newton.as_mut() else {
+            unreachable!("prepare_solver chooses Newton only with its solver built");
+        };
+        let input = StepInput {
+            constraints: &self.constraints,
+            inv_mass: &ps.inv_mass,
+            start: &ps.positions,
+            free: &ws.free,
+            colliders: &self.colliders,
+            params: &self.params,
+            inv_h2: 1.0 / (h * h),
+        };
+        let warm = match (self.params.warm_start, ws.last_dt) {
+            (true, Some(last)) => Some((h / last) * (h / last)),
+            _ => None,
+        };
+        let out = global.solve(&input, &mut ws.pred, &mut ws.mu, &mut ws.contacts, warm);
+        StepReport {
+            iterations: out.iterations,
+            factorizations: out.factorizations,
+            fallback_sweeps: out.fallback_sweeps,
+            converged: out.converged,
+            max_stretch: out.max_stretch,
+            ..StepReport::default()
+        }
+    }
+
+    /// Sweeps (serial, coloured or strips) until every constraint holds its
+    /// stretch tolerance and no particle is deeper in a collider than the
+    /// contact tolerance, or the iteration limit: before each sweep the
+    /// contacts are projected and the largest error is measured.
+    fn sweep_until_converged(&mut self, h: f64, solver: Solver) -> StepReport {
+        let inv_h2 = 1.0 / (h * h);
+        let ws = &mut self.workspace;
+        let (cs, ps) = (&self.constraints, &self.particles);
+        let mut coloured = ws.coloured.as_mut().filter(|_| solver == Solver::Coloured);
+        let mut strips = ws.strips.as_mut().filter(|_| solver == Solver::Strips);
+        let mut report = StepReport::default();
+        loop {
+            let penetration = contact::project_contacts(
+                &self.colliders,
+                &ps.positions,
+                &ps.inv_mass,
+                &mut ws.pred,
+                &mut ws.contacts,
+            );
+            let stretch = match coloured {
+                Some(_) => colouring::max_error(cs, &ws.pred, &ws.mu, inv_h2),
+                None => cs.max_error(&ws.pred, &ws.mu, inv_h2),
+            };
+            report.max_stretch = stretch;
+            if stretch <= self.params.stretch_tolerance
+                && penetration <= self.params.contact_tolerance
+            {
+                report.converged = true;
+                return report;
+            }
+            if report.iterations >= self.params.max_iterations || stretch.is_nan() {
+                return report;
+            }
+            let (k, pred, mu) = (&ps.inv_mass, &mut ws.pred, &mut ws.mu);
+            match (strips.as_deref_mut(), coloured.as_deref_mut()) {
+                (Some(sweep), _) => sweep.sweep(cs, k, pred, mu, inv_h2),
+                (None, Some(sweep)) => sweep.sweep(cs, k, pred, mu, inv_h2),
+                (None, None) => solver::gauss_seidel_sweep(cs, k, pred, mu, inv_h2),
+            }
+            report.iterations += 1;
+        }
+    }
+
+    /// Stage 6: velocity update and contact velocities. Positions come from
+    /// the preview; velocities are those of a particle that received its
+    /// impulses at the start of the step under constant force,
+    /// `(c_new − c)/h + h/2 (g + F/m)`; kinematic pins end on their paths;
+    /// then the optional velocity part of the constraints and the contacts'
+    /// velocity part (restitution, friction); then the clock.
+    fn commit(&mut self, h: f64, t_end: f64, report: &mut StepReport) {
+        let g = self.params.gravity;
+        let n = self.particles.len();
+        let (ws, ps) = (&mut self.workspace, &mut self.particles);
+        for (i, f) in self.external_forces.iter().enumerate().take(n) {
+            if ps.inv_mass[i] > 0.0 {
+                let a = g + f * ps.inv_mass[i];
+                ps.velocities[i] = (ws.pred[i] - ps.positions[i]) / h + 0.5 * h * a;
+                ps.positions[i] = ws.pred[i];
+            } else {
+                ps.velocities[i] = Vector3::zeros();
+            }
+        }
+        for pin in &self.kinematic {
+            let i = pin.particle.index();
+            let end = pin.path.at(t_end);
+            ps.velocities[i] = (end - ps.positions[i]) / h;
+            ps.positions[i] = end;
+        }
+        let cs = &self.constraints;
+        for _ in 0..self.params.velocity_iterations {
+            solver::velocity_sweep(cs, &ps.inv_mass, &ps.positions, &mut ps.velocities);
+        }
+        report.n_contacts = contact::contact_velocities(&mut ps.velocities, &ws.contacts);
+        ws.last_dt = Some(h);
+        self.time = t_end;
+        self.n_steps += 1;
+    }
+
+    /// Stage 7: [`ClothError::Diverged`] when the step just taken left a non-finite position,
+    /// velocity or stretch.
+    fn check_diverged(&self, report: &StepReport) -> Result<()> {
+        let diverged = |quantity, particle: Option<usize>, value: String| {
+            Err(ClothError::Diverged {
+                step: self.n_steps,
+                time: self.time,
+                quantity,
+                particle: particle.map(|i| i as u32),
+                value,
+            })
+        };
+        let ps = &self.particles;
+        for (quantity, column) in [("position", &ps.positions), ("velocity", &ps.velocities)] {
+            if let Some((i, p)) = column
+                .iter()
+                .enumerate()
+                .find(|(_, p)| !p.iter().all(|c| c.is_finite()))
+            {
+                return diverged(quantity, Some(i), format!("[{}, {}, {}]", p.x, p.y, p.z));
+            }
+        }
+        if !report.max_stretch.is_finite() {
+            let cs = &self.constraints;
+            // Finite positions whose differences overflow: name the edge.
+            let edge = (0..cs.len()).find(|&k| !cs.stretch(k, &ps.positions).is_finite());
+            return match edge {
+                Some(k) => diverged(
+                    "stretch",
+                    None,
+                    format!(
+                        "{} on edge {}-{}",
+                        cs.stretch(k, &ps.positions),
+                        cs.a[k],
+                        cs.b[k]
+                    ),
+                ),
+                None => diverged("stretch", None, report.max_stretch.to_string()),
+            };
+        }
+        Ok(())
+    }
+
+    fn check_finite(&self) -> Result<()> {
+        let ps = &self.particles;
+        for (what, column) in [("position", &ps.positions), ("velocity", &ps.velocities)] {
+            for (i, p) in column.iter().enumerate() {
+                if !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()) {
+                    return Err(ClothError::NonFinite {
+                        particle: i as u32,
+                        what,
+                        x: p.x,
+                        y: p.y,
+                        z: p.z,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::GridCloth;
+    use crate::solver::SolverParams;
+
+    /// Issue 11: a step must never end `Ok` with a NaN or infinite state.
+    #[test]
+    fn a_non_finite_state_after_a_step_names_the_quantity_and_the_particle() {
+        let mut world = ClothWorld::new(SolverParams::default());
+        world.add_cloth(GridCloth::new(3, 3, 0.1).pin(0)).unwrap();
+        world.step(0.01).unwrap();
+        let finite = StepReport::default();
+        assert!(world.check_diverged(&finite).is_ok());
+        world.particles_mut().velocities[5] = Vector3::new(0.0, 0.0, f64::INFINITY);
+        let err = world.check_diverged(&finite).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "simulation diverged at step 1 (t = 0.01 s): expected a finite velocity of \
+             particle 5, found [0, 0, inf]"
+        );
+        world.particles_mut().positions[4].y = f64::NAN;
+        let err = world.check_diverged(&finite).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                ClothError::Diverged {
+                    step: 1,
+                    quantity: "position",
+                    particle: Some(4),
+                    ..
+                }
+            ),
+            "{err}"
+        );
+        let mut world = ClothWorld::new(SolverParams::default());
+        world.add_cloth(GridCloth::new(3, 3, 0.1).pin(0)).unwrap();
+        let overflowed = StepReport {
+            max_stretch: f64::INFINITY,
+            ..StepReport::default()
+        };
+        let err = world.check_diverged(&overflowed).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                ClothError::Diverged {
+                    quantity: "stretch",
+                    particle: None,
+                    ..
+                }
+            ),
+            "{err}"
+        );
+    }
+
+    fn bits(world: &ClothWorld) -> Vec<u64> {
+        let ps = world.particles();
+        ps.positions
+            .iter()
+            .chain(&ps.velocities)
+            .flat_map(|x| x.iter().map(|c| c.to_bits()))
+            .collect()
+    }
+
+    /// Issue 12: a step that cannot run Newton runs Gauss–Seidel and says so.
+    /// No input can make the Newton solver fail to build (faer fails only on
+    /// an index overflow or an allocation failure), so the test makes it fail
+    /// ([`crate::newton::FailBuilds`]).
+    #[test]
+    fn a_newton_solver_that_cannot_be_built_falls_back_to_gauss_seidel_and_says_so() {
+        let cloth = || GridCloth::new(6, 6, 0.05).pin(0).pin(5);
+        let mut newton = ClothWorld::new(SolverParams::default());
+        newton.add_cloth(cloth()).unwrap();
+        let mut gauss_seidel = ClothWorld::new(SolverParams {
+            method: Method::GaussSeidel,
+            ..SolverParams::default()
+        });
+        gauss_seidel.add_cloth(cloth()).unwrap();
+        {
+            let _fail = crate::newton::FailBuilds::new();
+            for _ in 0..5 {
+                let report = newton.step(0.01).unwrap();
+                assert_eq!(report.method_used, Method::GaussSeidel);
+                assert_eq!(report.fallback, Some(Fallback::NewtonUnavailable));
+                let expected = gauss_seidel.step(0.01).unwrap();
+                assert_eq!(expected.fallback, None);
+                // The fallback is the Gauss–Seidel step, warm start included.
+                assert_eq!(report.iterations, expected.iterations);
+                assert_eq!(bits(&newton), bits(&gauss_seidel));
+            }
+        }
+        // The next step builds the solver again.
+        let report = newton.step(0.01).unwrap();
+        assert_eq!(
+            (report.method_used, report.fallback),
+            (Method::Newton, None)
+        );
+        assert!(report.converged && report.factorizations > 0, "{report:?}");
+    }
+
+    #[test]
+    fn the_fallback_reason_is_readable() {
+        assert_eq!(
+            Fallback::NewtonUnavailable.to_string(),
+            "the Newton solver could not be built (ordering, symbolic factorisation or \
+             memory); Gauss-Seidel ran instead"
+        );
+    }
+}
