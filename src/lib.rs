@@ -1,15 +1,37 @@
-//! modelgap holds physical models against measurements and shows where they fail.
+//! modelgap holds physical models against measurements, shows where they fail, names the
+//! physical effect they are missing, adds it and shows the error fall.
 //!
-//! It builds and diagnoses models of physical systems as **bond graphs** (elements, causality,
-//! equations in the notation of the literature, simulation, causal graphs, fault trees and
-//! temporal signatures), reads and writes **measurements** as CSV or MCAP recordings, and
-//! compares the two. A cloth simulator and the loop that names the physical effect a model
-//! is missing are on their way; see the README.
+//! It builds and diagnoses models of physical systems as **bond graphs** (elements,
+//! causality, equations in the notation of the literature, simulation, causal graphs, fault
+//! trees and temporal signatures), simulates **cloth** with the impulse-based method for
+//! inextensible cloth, reads and writes **measurements** as CSV or MCAP recordings, and runs
+//! the **measurement loop** on either kind of model: [`compare()`] where it fails,
+//! [`explain()`] which effect is missing (or that nothing is, or that the recording cannot
+//! be judged), [`Model::with_effects`] to add it.
 //!
-//! This crate is the facade: it re-exports the workspace's crates under one name and ships
-//! the `modelgap` command-line tool.
+//! This crate is the facade: it re-exports the workspace's crates under one name, loads a
+//! model of any kind by file or name ([`load`]), and ships the `modelgap` command-line tool.
 //!
-//! # Example
+//! # Example: the loop
+//!
+//! ```
+//! use modelgap::{CompareOptions, ExplainOptions, LoadOptions, compare, explain};
+//!
+//! let motor = modelgap::load_model("dc-motor", &LoadOptions::default())?;
+//! let rec = modelgap::load_recording(
+//!     "examples/data/motor_hidden_effect.csv".as_ref(),
+//!     motor.as_ref(),
+//! )?;
+//! let ex = explain(motor.as_ref(), &rec, &ExplainOptions::default())?;
+//! println!("{}", motor.story().explanation_text(&ex, 5)); // Coulomb friction, 0.012 N m
+//! assert_eq!(ex.chosen[0].candidate.id, "coulomb@1m");
+//! let fixed = motor.with_effects(&ex.effects())?; // a new model with the effect built in
+//! let after = compare(fixed.as_ref(), &rec, &CompareOptions::default())?;
+//! println!("{}", fixed.story().comparison_text(&after)); // the error at its noise floor
+//! # Ok::<(), modelgap::Error>(())
+//! ```
+//!
+//! # Example: a simulation
 //!
 //! Load the built-in DC motor, run it for half a second from rest and read the speed:
 //!
@@ -26,18 +48,25 @@
 //! # Ok::<(), modelgap::Error>(())
 //! ```
 //!
-//! The same with a recording on disk: [`io::write_recording_path`] stores a run (from
-//! [`bond::simulate::Run::to_recording`]) as CSV or MCAP, and
-//! [`bond::diagnosis::diagnose`] diagnoses a recording against a model.
-//!
 //! # Map
 //!
-//! - [`Recording`], [`Signal`]: measured or simulated signals on one time axis.
-//! - [`io`]: CSV and MCAP readers and writers ([`io::read_recording_path`],
-//!   [`io::write_recording_path`] choose by extension).
+//! - [`load`]: [`load_model`] and [`load_recording`], the one place that knows the kinds of
+//!   model (bond-graph files and built-ins, cloth scene files and built-ins).
+//! - [`Model`]: the seam every kind implements (predict, candidates, with effects, and the
+//!   [`Model::story`] its results read by); [`Candidate`], [`Effect`].
+//! - [`compare()`], [`explain()`] and their options and results ([`Comparison`],
+//!   [`Explanation`], [`Verdict`]); [`judge`]: what noise leaves, and when a recording cannot
+//!   be judged; [`fit`]: bounded Levenberg–Marquardt.
+//! - [`story`], [`json`], [`report`]: the results as text, JSON and the HTML report with its
+//!   Foxglove MCAP.
+//! - [`Recording`], [`Signal`], [`io`]: signals on one time axis, CSV and MCAP
+//!   ([`io::read_recording_path`], [`io::write_recording_path`] choose by extension;
+//!   [`io::atomic`] writes every file atomically).
 //! - [`residual`]: residual statistics, the noise floor, thresholds, failure windows.
 //! - [`bond`]: the bond-graph crate (`modelgap-bond`): [`bond::BondGraph`], model files,
-//!   [`bond::library`], causality, equations, simulation and diagnosis.
+//!   [`bond::library`], causality, equations, simulation, diagnosis, the candidate effects.
+//! - [`cloth`]: the cloth crate (`modelgap-cloth`): meshes, the solvers, colliders, scenes,
+//!   marker recordings, [`cloth::ClothModel`].
 //! - [`prelude`]: the names most programs need, in one `use`.
 //! - [`Error`], [`Result`]: one error type over the workspace's crates.
 
@@ -47,8 +76,8 @@ pub use modelgap_core::residual::{FailureWindow, NoiseFloor, Residual, ResidualS
 pub use modelgap_core::{
     Candidate, CompareOptions, Comparison, CoreError, Effect, EffectKind, EffectParam,
     ExplainOptions, Explanation, Location, Model, OutputComparison, Prediction, RankedCandidate,
-    Recording, Signal, Verdict, compare, explain, fit, io, judge, math, noise, report, residual,
-    story,
+    Recording, Signal, Verdict, compare, explain, fit, io, json, judge, math, noise, report,
+    residual, story,
 };
 
 pub use modelgap_bond::BondError;

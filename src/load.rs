@@ -136,16 +136,51 @@ pub fn model_kind(path_or_name: &str) -> Result<ModelKind> {
     )))
 }
 
+/// A model as loaded, of its own kind (for bindings that hand out a class per kind; the loop
+/// itself takes [`AnyModel::into_model`]).
+#[derive(Clone, Debug)]
+pub enum AnyModel {
+    /// A bond graph.
+    BondGraph(Box<BondModel>),
+    /// A cloth scene.
+    ClothScene(Box<ClothModel>),
+}
+
+impl AnyModel {
+    /// The model behind the loop's seam.
+    #[must_use]
+    pub fn into_model(self) -> Box<dyn Model> {
+        match self {
+            AnyModel::BondGraph(m) => m,
+            AnyModel::ClothScene(m) => m,
+        }
+    }
+}
+
 /// Loads a model for the loop from a file or a built-in name, with `opts` applied.
 ///
 /// # Errors
 /// As [`model_kind`]; the model file's read errors (line, column, element); a `--set` of an
-/// unknown or unphysical value ([`crate::BondError`]); [`Error::Input`] for an option the
-/// model's kind does not take.
+/// unknown or unphysical value ([`Error::Set`]); [`Error::Input`] for an option the model's
+/// kind does not take.
 pub fn load_model(path_or_name: &str, opts: &LoadOptions) -> Result<Box<dyn Model>> {
+    Ok(load(path_or_name, opts)?.into_model())
+}
+
+/// Loads a model as [`load_model`] does, keeping its kind.
+///
+/// # Errors
+/// As [`load_model`].
+pub fn load(path_or_name: &str, opts: &LoadOptions) -> Result<AnyModel> {
     match model_kind(path_or_name)? {
-        ModelKind::BondGraph => Ok(Box::new(load_bond(path_or_name, opts)?)),
-        ModelKind::ClothScene => Ok(Box::new(load_cloth(path_or_name, opts)?)),
+        ModelKind::BondGraph => Ok(AnyModel::BondGraph(Box::new(load_bond(
+            path_or_name,
+            opts,
+        )?))),
+        ModelKind::ClothScene => Ok(AnyModel::ClothScene(Box::new(load_cloth(
+            path_or_name,
+            opts,
+        )?))),
     }
 }
 

@@ -19,7 +19,6 @@ use modelgap::bond::simulate::{Drive, Hold, Inputs, ParamChange, SimOptions, Sol
 use modelgap::bond::{BondError, BondGraph, Equations, StateSpace, assign_causality, library};
 use modelgap::{Effect, Model, Threshold};
 use numpy::{Complex64, PyArray1};
-use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
@@ -35,23 +34,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(hidden_recording, m)?)?;
     m.add_function(wrap_pyfunction!(hidden_cases, m)?)?;
     Ok(())
-}
-
-/// The loop's model behind a Python model object.
-///
-/// # Errors
-/// `TypeError` for anything but a `modelgap.bond.BondModel`.
-pub fn model_of(obj: &Bound<'_, PyAny>) -> PyResult<Arc<dyn Model>> {
-    if let Ok(m) = obj.cast::<PyBondModel>() {
-        return Ok(m.borrow().model.clone());
-    }
-    if let Ok(m) = obj.cast::<crate::cloth::PyClothModel>() {
-        return Ok(m.get().model());
-    }
-    Err(PyTypeError::new_err(format!(
-        "model must be a modelgap.bond.BondModel or a modelgap.cloth.ClothModel, found {}",
-        obj.get_type().name()?
-    )))
 }
 
 /// Candidates as dicts with ``id``, ``name``, ``kind``, ``acts_on`` and ``params`` (names).
@@ -229,6 +211,17 @@ impl PyBondModel {
 
     fn from_graph(g: BondGraph) -> PyResult<Self> {
         Self::build(g, Start::Rest, Hold::Zero, Vec::new())
+    }
+
+    /// The class of a model loaded by the library ([`modelgap::load::load`]), holding
+    /// recorded inputs as `hold`.
+    pub fn from_model(m: &BondModel, hold: Hold) -> PyResult<Self> {
+        Self::build(m.graph().clone(), m.start(), hold, Vec::new())
+    }
+
+    /// The loop's model: the graph with its effects, its start and input hold.
+    pub fn loop_model(&self) -> Arc<dyn Model> {
+        self.model.clone()
     }
 
     fn rebuilt(&self, start: Start, hold: Hold, effects: Vec<Effect>) -> PyResult<Self> {

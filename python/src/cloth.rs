@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 use modelgap::cloth::markers::{read_markers_path, write_markers_path};
 use modelgap::cloth::model::{markers_to_recording, recording_to_markers, simulate_markers};
+use modelgap::cloth::solver::Fallback;
 use modelgap::cloth::trajectory::{MarkerSelection, RunOptions, run_scene, write_run_path};
 use modelgap::cloth::{
     BuildMesh as _, ClothError, ClothId, ClothMesh, ClothModel, ClothWorld, Collider, GridCloth,
@@ -753,7 +754,36 @@ impl PySolverParams {
 }
 
 /// What pickling stores of a step report: steps, then the report's fields in order.
-type ReportState = (usize, usize, f64, bool, usize, usize, usize, f64);
+type ReportState = (
+    usize,
+    usize,
+    f64,
+    bool,
+    usize,
+    usize,
+    usize,
+    f64,
+    String,
+    Option<String>,
+);
+
+/// A fallback as a short code (for pickling) and back.
+fn fallback_code(f: Option<Fallback>) -> Option<String> {
+    f.map(|f| {
+        match f {
+            Fallback::NewtonUnavailable => "newton-unavailable",
+            _ => "no-constraints",
+        }
+        .to_owned()
+    })
+}
+
+fn fallback_of(code: Option<&str>) -> Option<Fallback> {
+    match code? {
+        "newton-unavailable" => Some(Fallback::NewtonUnavailable),
+        _ => Some(Fallback::NoConstraints),
+    }
+}
 
 /// What ``ClothWorld.step`` did over its steps: summed iterations, the worst stretch,
 /// converged only if every step converged.
@@ -806,6 +836,18 @@ impl PyStepReport {
     fn max_penetration(&self) -> f64 {
         self.inner.max_penetration
     }
+    /// The method the last step ran (``newton``, ``gauss-seidel`` or ``strips``): not the
+    /// one asked for when it fell back.
+    #[getter]
+    fn method(&self) -> &'static str {
+        method_name(self.inner.method_used)
+    }
+    /// Why a step ran another method than the one asked for (the first such step), or
+    /// ``None``.
+    #[getter]
+    fn fallback(&self) -> Option<String> {
+        self.inner.fallback.map(|f| f.to_string())
+    }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, ReportState)> {
         let r = &slf.get().inner;
@@ -820,6 +862,8 @@ impl PyStepReport {
                 r.fallback_sweeps,
                 r.n_contacts,
                 r.max_penetration,
+                method_name(r.method_used).to_owned(),
+                fallback_code(r.fallback),
             ),
         ))
     }
@@ -836,8 +880,10 @@ impl PyStepReport {
         fallback_sweeps: usize,
         n_contacts: usize,
         max_penetration: f64,
-    ) -> Self {
-        Self {
+        method: &str,
+        fallback: Option<&str>,
+    ) -> PyResult<Self> {
+        Ok(Self {
             inner: StepReport {
                 iterations,
                 max_stretch,
@@ -846,9 +892,11 @@ impl PyStepReport {
                 fallback_sweeps,
                 n_contacts,
                 max_penetration,
+                method_used: parse_method(method)?,
+                fallback: fallback_of(fallback),
             },
             steps,
-        }
+        })
     }
 
     fn __repr__(&self) -> String {
@@ -1748,6 +1796,11 @@ impl PyClothModel {
     /// The loop's model.
     pub fn model(&self) -> std::sync::Arc<dyn Model> {
         self.model.clone()
+    }
+
+    /// The class of a model loaded by the library ([`modelgap::load::load`]).
+    pub fn from_model(m: ClothModel) -> PyResult<Self> {
+        Self::build(m, Vec::new())
     }
 
     fn settings_state(&self) -> (String, Option<f64>, usize, usize) {

@@ -14,11 +14,11 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyTuple, PyType};
 
-use crate::bond::model_of;
 use crate::convert::{
     array1, columns_to_array2, detached, noise_map, recording_from_py, run_watched,
 };
 use crate::errors::{data_error, to_py_err};
+use crate::model::model_of;
 
 /// Registers the core classes and functions.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -793,7 +793,8 @@ fn py_compare(
     min_window: Option<f64>,
     predictability: bool,
 ) -> PyResult<PyComparison> {
-    let model = model_of(model)?;
+    let loop_model = model_of(model)?;
+    let model = loop_model.model();
     let opts = CompareOptions {
         noise: noise_map(noise)?,
         band_sigmas,
@@ -804,7 +805,7 @@ fn py_compare(
     let rec = &rec.get().inner;
     let result = detached(py, move || compare(model.as_ref(), rec, &opts))?;
     Ok(PyComparison {
-        inner: result.map_err(to_py_err)?,
+        inner: loop_model.finish(result)?,
     })
 }
 
@@ -822,10 +823,18 @@ fn py_explain(
     only: Option<Vec<String>>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyExplanation> {
-    let model = model_of(model)?;
+    let loop_model = model_of(model)?;
+    let model = loop_model.model();
     let noise = noise_map(noise)?;
     let rec = &rec.get().inner;
+    let python_model = match &loop_model {
+        crate::model::LoopModel::Python(m) => Some(m.clone()),
+        crate::model::LoopModel::Rust(_) => None,
+    };
     let result = run_watched(py, progress, move |watch| {
+        if let Some(m) = &python_model {
+            m.stop_with(watch.cancel.clone());
+        }
         let opts = ExplainOptions {
             noise,
             significance,
@@ -838,7 +847,7 @@ fn py_explain(
         explain(model.as_ref(), rec, &opts)
     })?;
     Ok(PyExplanation {
-        inner: result.map_err(to_py_err)?,
+        inner: loop_model.finish(result)?,
     })
 }
 

@@ -102,10 +102,15 @@ fn bond_kind(e: &BondError) -> Kind {
 
 /// Converts any modelgap error into its Python exception, with the Rust message unchanged.
 pub fn to_py_err(e: impl Into<Error>) -> PyErr {
-    let e: Error = e.into();
+    let e = match e.into() {
+        Error::Cloth(c) => return cloth_err(c),
+        other => other,
+    };
     let kind = match &e {
         Error::Core(c) => core_kind(c),
         Error::Bond(b) => bond_kind(b),
+        Error::Set { source, .. } => bond_kind(source),
+        Error::Input(_) => Kind::Data,
         _ => Kind::Model,
     };
     let message = e.to_string();

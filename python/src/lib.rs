@@ -15,6 +15,7 @@ mod convert;
 #[path = "core.rs"]
 mod core_api;
 mod errors;
+mod model;
 
 /// Python bindings of modelgap: recordings, compare, explain, bond-graph models, cloth.
 #[pymodule]
@@ -23,5 +24,6 @@ fn _modelgap(m: &Bound<'_, PyModule>) -> PyResult<()> {
     core_api::register(m)?;
     bond::register(m)?;
     cloth::register(m)?;
+    model::register(m)?;
     Ok(())
 }

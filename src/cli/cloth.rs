@@ -240,12 +240,20 @@ fn run_summary(run: &ClothRun, wall_s: f64, out: &Path) -> String {
     );
     let _ = writeln!(
         s,
-        "worst stretch {:.3e} ({} of {} steps converged), iterations mean {:.1}, max {}",
+        "worst stretch {:.3e} ({} of {} steps converged), iterations mean {:.1}, max {}{}",
         st.max_stretch,
         st.steps - st.unconverged_steps,
         st.steps,
         st.mean_iterations(),
         st.max_iterations,
+        if st.fallback_steps > 0 {
+            format!(
+                "; {} steps fell back to Gauss-Seidel (Newton could not be built)",
+                st.fallback_steps
+            )
+        } else {
+            String::new()
+        },
     );
     let _ = writeln!(
         s,
@@ -283,6 +291,8 @@ struct BenchReport {
     mean_iterations: f64,
     max_iterations: usize,
     unconverged_steps: usize,
+    /// Steps that ran another method than the one asked for (Newton could not be built).
+    fallback_steps: usize,
     wall_s: f64,
     x_real_time: Option<f64>,
     threads: usize,
@@ -346,6 +356,7 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         mean_iterations: st.mean_iterations(),
         max_iterations: st.max_iterations,
         unconverged_steps: st.unconverged_steps,
+        fallback_steps: st.fallback_steps,
         wall_s,
         x_real_time: real_time_factor(&st, wall_s),
         threads,
@@ -393,8 +404,13 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     );
     let _ = writeln!(
         s,
-        "max stretch {:.3e}, iterations mean {:.1}, max {}, {} steps unconverged",
-        report.max_stretch, report.mean_iterations, report.max_iterations, report.unconverged_steps
+        "max stretch {:.3e}, iterations mean {:.1}, max {}, {} steps unconverged, {} fell back \
+         from Newton",
+        report.max_stretch,
+        report.mean_iterations,
+        report.max_iterations,
+        report.unconverged_steps,
+        report.fallback_steps
     );
     let _ = writeln!(
         s,

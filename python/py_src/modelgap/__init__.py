@@ -13,20 +13,42 @@ The measurement loop::
     after = modelgap.compare(fixed, rec)           # ... and watch the error fall
 
 Bond-graph models live in :mod:`modelgap.bond`, the cloth simulator in :mod:`modelgap.cloth`,
-plots (matplotlib) in :mod:`modelgap.plot`. ``explain_many`` explains many recordings, in
-threads or processes (every object it sends pickles).
+plots (matplotlib) in :mod:`modelgap.plot`. ``load_model`` loads either kind from a file or a
+built-in name, and ``load_recording`` reads a recording the way the model takes it.
+``explain_many`` explains many recordings, in threads or processes (every object it sends
+pickles).
+
+A model written in Python plugs into the same loop: any object with ``outputs`` (the
+measured outputs it predicts), ``predict(recording, effects)`` (a dict of output name to
+one value per sample, with each ``Effect`` applied at its values) and ``candidates()`` (the
+``Candidate`` effects it could be missing), see :class:`ModelLike`.
 """
 
 from __future__ import annotations
 
 from concurrent.futures import Executor
-from typing import Any, Callable, Iterable, Mapping, Optional, Sequence, TypeVar, Union
+from typing import (
+    Any,
+    Callable,
+    Iterable,
+    Mapping,
+    Optional,
+    Protocol,
+    Sequence,
+    TypeVar,
+    Union,
+    runtime_checkable,
+)
+
+import numpy.typing as npt
 
 from ._modelgap import (
+    Candidate,
     Comparison,
     ConvergenceError,
     DataError,
     Effect,
+    EffectParam,
     Explanation,
     FittedParam,
     ModelError,
@@ -37,24 +59,105 @@ from ._modelgap import (
     Recording,
     compare,
     explain,
+    load_model,
+    load_recording,
     write_report,
 )
 from . import bond, cloth
 
-Model = Union[bond.BondModel, cloth.ClothModel]
-"""What ``compare``, ``explain`` and ``fix`` take: a bond-graph model or a cloth model."""
 
-_M = TypeVar("_M", bond.BondModel, cloth.ClothModel)
+@runtime_checkable
+class ModelLike(Protocol):
+    """A model written in Python, held against recordings like the built-in kinds.
+
+    - ``outputs``: the names of the measured outputs it predicts (as in recordings);
+    - ``predict(recording, effects)``: the outputs at the recording's times, driven by its
+      inputs, as a dict of name to an array of one value per sample, with every ``Effect``
+      of ``effects`` applied at its ``values`` (an effect's ``id`` says which of the
+      model's ``candidates()`` it is);
+    - ``candidates()``: the ``Candidate`` effects the model could be missing, each with its
+      ``EffectParam`` parameters (bounds, start value, typical size).
+
+    Optional: ``name`` (for reports), ``inputs`` (the recorded inputs it is driven by: the
+    verdict holds what the model leaves against them) and ``unit(output)``. ``predict`` runs
+    with the interpreter taken for that call only while the loop itself runs in parallel;
+    it may raise ``modelgap.ModelError`` for values it cannot simulate (the fit steps away),
+    and any other exception stops the loop and comes back as itself.
+    """
+
+    @property
+    def outputs(self) -> Sequence[str]: ...
+
+    def predict(
+        self, recording: Recording, effects: Sequence[Effect]
+    ) -> Mapping[str, npt.ArrayLike]: ...
+
+    def candidates(self) -> Sequence[Candidate]: ...
+
+
+Model = Union[bond.BondModel, cloth.ClothModel, ModelLike]
+"""What ``compare``, ``explain`` and ``fix`` take: a bond-graph model, a cloth model or a model
+written in Python (:class:`ModelLike`)."""
+
+
+class WithEffects:
+    """A model written in Python with effects built in: it predicts with them applied before
+    any the loop adds (what ``with_effects`` gives for a model that has no ``with_effects``
+    of its own)."""
+
+    def __init__(self, model: ModelLike, effects: Sequence[Effect]) -> None:
+        self.model = model
+        self.effects = list(effects)
+        self.name = getattr(model, "name", type(model).__name__)
+
+    @property
+    def outputs(self) -> Sequence[str]:
+        return self.model.outputs
+
+    @property
+    def inputs(self) -> Sequence[str]:
+        return list(getattr(self.model, "inputs", []))
+
+    def unit(self, output: str) -> str:
+        unit = getattr(self.model, "unit", None)
+        return unit(output) if unit is not None else ""
+
+    def predict(
+        self, recording: Recording, effects: Sequence[Effect]
+    ) -> Mapping[str, npt.ArrayLike]:
+        return self.model.predict(recording, [*self.effects, *effects])
+
+    def candidates(self) -> Sequence[Candidate]:
+        return self.model.candidates()
+
+    def __repr__(self) -> str:
+        ids = ", ".join(e.id for e in self.effects)
+        return f"<WithEffects {self.name} + [{ids}]>"
+
+
+_M = TypeVar("_M")
+
+
+def with_effects(model: _M, effects: Sequence[Effect]) -> _M:
+    """The model with ``effects`` built in: the model's own ``with_effects`` (``BondModel``,
+    ``ClothModel``, or a Python model that has one), else a :class:`WithEffects` around it."""
+    own = getattr(model, "with_effects", None)
+    if own is not None:
+        return own(list(effects))  # type: ignore[no-any-return]
+    return WithEffects(model, effects)  # type: ignore[arg-type, return-value]
 
 __all__ = [
+    "Candidate",
     "Comparison",
     "ConvergenceError",
     "DataError",
     "Effect",
+    "EffectParam",
     "Explanation",
     "FittedParam",
     "Model",
     "ModelError",
+    "ModelLike",
     "ModelgapError",
     "OutputComparison",
     "OutputSummary",
@@ -66,6 +169,10 @@ __all__ = [
     "explain",
     "explain_many",
     "fix",
+    "load_model",
+    "load_recording",
+    "with_effects",
+    "WithEffects",
     "write_report",
 ]
 
@@ -79,7 +186,8 @@ def fix(
     max_effects: int = 2,
     progress: Optional[Callable[[int, int], Any]] = None,
 ) -> _M:
-    """Explains ``rec`` and returns the model with the chosen effects built in.
+    """Explains ``rec`` and returns the model with the chosen effects built in
+    (:func:`with_effects`).
 
     When nothing is missing the model comes back unchanged (a new, equal model).
     """
@@ -91,7 +199,7 @@ def fix(
         max_effects=max_effects,
         progress=progress,
     )
-    return model.with_effects(ex.effects)
+    return with_effects(model, ex.effects)
 
 
 def _explain_one(model: Any, rec: Recording, options: dict[str, Any]) -> Explanation:

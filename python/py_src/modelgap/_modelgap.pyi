@@ -1,13 +1,14 @@
 # Hand-written stubs of the extension module; checked by `python -m mypy.stubtest modelgap._modelgap`.
 from os import PathLike
 from pathlib import Path
-from typing import Any, Callable, Optional, Union, final
+from typing import Any, Callable, Mapping, Optional, Protocol, Sequence, Union, final
 
 import numpy as np
 import numpy.typing as npt
 
 __all__ = [
     "BondModel",
+    "Candidate",
     "ClothMesh",
     "ClothModel",
     "ClothRun",
@@ -18,6 +19,7 @@ __all__ = [
     "DataError",
     "Diagnosis",
     "Effect",
+    "EffectParam",
     "Explanation",
     "FittedParam",
     "MarkerRecording",
@@ -34,6 +36,8 @@ __all__ = [
     "explain",
     "hidden_cases",
     "hidden_recording",
+    "load_model",
+    "load_recording",
     "scene",
     "scenes",
     "table7",
@@ -231,7 +235,70 @@ class Explanation:
     def __reduce__(self) -> tuple[Any, tuple[str]]: ...
     def __eq__(self, value: object, /) -> bool: ...
 
-_Model = Union[BondModel, ClothModel]
+class _ModelLike(Protocol):
+    """A model written in Python (see ``modelgap.ModelLike``)."""
+
+    @property
+    def outputs(self) -> Sequence[str]: ...
+    def predict(
+        self, recording: Recording, effects: Sequence[Effect]
+    ) -> Mapping[str, npt.ArrayLike]: ...
+    def candidates(self) -> Sequence[Candidate]: ...
+
+_Model = Union[BondModel, ClothModel, _ModelLike]
+
+@final
+class EffectParam:
+    def __new__(
+        cls,
+        name: str,
+        *,
+        lower: float,
+        upper: float,
+        initial: Optional[float] = None,
+        scale: Optional[float] = None,
+        unit: str = "",
+    ) -> EffectParam: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def unit(self) -> str: ...
+    @property
+    def initial(self) -> float: ...
+    @property
+    def lower(self) -> float: ...
+    @property
+    def upper(self) -> float: ...
+    @property
+    def scale(self) -> float: ...
+
+@final
+class Candidate:
+    def __new__(
+        cls,
+        id: str,
+        name: str,
+        params: Sequence[EffectParam],
+        *,
+        kind: str = "missing-element",
+        acts_on: str = "",
+    ) -> Candidate: ...
+    @property
+    def id(self) -> str: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def params(self) -> list[str]: ...
+    def effect(self, values: dict[str, float]) -> Effect: ...
+
+def load_model(
+    model: str,
+    *,
+    set: Optional[dict[str, float]] = None,
+    steady_start: bool = False,
+    hold: str = "zoh",
+) -> Union[BondModel, ClothModel]: ...
+def load_recording(path: _Path, model: _Model) -> Recording: ...
 
 def compare(
     model: _Model,
@@ -514,6 +581,10 @@ class StepReport:
     def n_contacts(self) -> int: ...
     @property
     def max_penetration(self) -> float: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def fallback(self) -> Optional[str]: ...
     @staticmethod
     def _from_state(
         steps: int,
@@ -524,6 +595,8 @@ class StepReport:
         fallback_sweeps: int,
         n_contacts: int,
         max_penetration: float,
+        method: str,
+        fallback: Optional[str],
     ) -> StepReport: ...
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]: ...
 
