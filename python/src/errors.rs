@@ -71,9 +71,29 @@ enum Kind {
     Data,
     Model,
     Convergence,
+    /// A run stopped by its cancel flag: `KeyboardInterrupt`.
+    Interrupt,
+}
+
+fn cloth_kind(e: &ClothError) -> Kind {
+    match e {
+        ClothError::Core(c) => core_kind(c),
+        ClothError::Diverged { .. } => Kind::Model,
+        ClothError::Cancelled { .. } => Kind::Interrupt,
+        _ => Kind::Data,
+    }
 }
 
 fn core_kind(e: &CoreError) -> Kind {
+    // A model's own error through the loop's seam keeps its crate's class.
+    if let Some(domain) = e.model_error() {
+        if let Some(b) = domain.downcast_ref::<BondError>() {
+            return bond_kind(b);
+        }
+        if let Some(c) = domain.downcast_ref::<ClothError>() {
+            return cloth_kind(c);
+        }
+    }
     match e {
         CoreError::Model { .. } => Kind::Model,
         CoreError::Fit { .. } => Kind::Convergence,
@@ -93,7 +113,7 @@ fn bond_kind(e: &BondError) -> Kind {
         | BondError::TooLarge { .. }
         | BondError::UnknownParameter { .. }
         | BondError::UnknownModel { .. } => Kind::Data,
-        BondError::Ode(_) => Kind::Convergence,
+        BondError::Ode(_) | BondError::NoSteadyState { .. } => Kind::Convergence,
         // A law that is NaN at the start and a state that runs away are the model's own:
         // ModelError, as for every other model that cannot be simulated.
         _ => Kind::Model,
@@ -102,25 +122,25 @@ fn bond_kind(e: &BondError) -> Kind {
 
 /// Converts any modelgap error into its Python exception, with the Rust message unchanged.
 pub fn to_py_err(e: impl Into<Error>) -> PyErr {
-    let e = match e.into() {
-        Error::Cloth(c) => return cloth_err(c),
-        other => other,
-    };
+    let e: Error = e.into();
     let kind = match &e {
         Error::Core(c) => core_kind(c),
         Error::Bond(b) => bond_kind(b),
+        Error::Cloth(c) => cloth_kind(c),
         Error::Set { source, .. } => bond_kind(source),
         Error::Input(_) => Kind::Data,
         _ => Kind::Model,
     };
-    let message = e.to_string();
+    raise(kind, e.to_string())
+}
+
+/// The exception of `kind` with `message`.
+fn raise(kind: Kind, message: String) -> PyErr {
     match kind {
         Kind::Model => ModelError::new_err(message),
         Kind::Convergence => ConvergenceError::new_err(message),
-        Kind::Data => Python::attach(|py| match data_error_type(py) {
-            Ok(t) => PyErr::from_type(t.clone(), message),
-            Err(err) => err,
-        }),
+        Kind::Interrupt => PyKeyboardInterrupt::new_err(message),
+        Kind::Data => data_error(message),
     }
 }
 
@@ -131,12 +151,7 @@ pub fn to_py_err(e: impl Into<Error>) -> PyErr {
 /// `ModelError`: the model cannot be simulated), a cancelled run (`KeyboardInterrupt`), and
 /// core errors, which map as `to_py_err` maps them.
 pub fn cloth_err(e: ClothError) -> PyErr {
-    match e {
-        ClothError::Core(c) => to_py_err(c),
-        e @ ClothError::Diverged { .. } => ModelError::new_err(e.to_string()),
-        e @ ClothError::Cancelled { .. } => PyKeyboardInterrupt::new_err(e.to_string()),
-        other => data_error(other.to_string()),
-    }
+    to_py_err(e)
 }
 
 /// A `DataError` with a message of the bindings' own (a bad argument).

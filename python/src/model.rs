@@ -406,7 +406,7 @@ impl Model for PythonModel {
                         c.cancel();
                     }
                 }
-                CoreError::Model { message }
+                CoreError::model(message)
             })
         })
     }

@@ -157,3 +157,64 @@ def test_a_comparison_names_what_it_cannot_judge(motor: BondModel) -> None:
     omega = c.output("omega")
     assert omega.finding is not None and "omega reads 0 throughout" in omega.finding
     assert any("omega" in w for w in c.warnings)
+
+
+PUSHED_MASS = """
+name = "pushed-mass"
+[parameters]
+m = { value = 2.0, unit = "kg" }
+[inputs]
+F = { default = 1.0, unit = "N" }
+[[elements]]
+name = "F"
+kind = "Se"
+effort = "F"
+[[elements]]
+name = "m"
+kind = "I"
+parameter = "m"
+[[elements]]
+name = "1"
+kind = "1"
+[[bonds]]
+number = 1
+from = "F"
+to = "1"
+[[bonds]]
+number = 2
+from = "1"
+to = "m"
+[[outputs]]
+name = "v"
+flow = "1"
+unit = "m/s"
+"""
+
+
+def test_errors_through_the_loop_keep_their_class(tmp_path: Path) -> None:
+    """A model's own error crosses compare and explain with its documented class (issue 12)."""
+    t = np.linspace(0.0, 0.1, 101)
+    # A law that is NaN at the start: the model cannot be simulated.
+    nan_law = BondModel.from_toml(motor_with('parameter = "R"', 'effort = "f / 0"'))
+    rec = modelgap.Recording.from_numpy(t, np.column_stack([np.full_like(t, 12.0), t, t]), ["V", "i", "omega"])
+    with pytest.raises(ModelError, match="element R"):
+        modelgap.compare(nan_law, rec)
+    # No steady state to start from: a convergence failure.
+    mass = BondModel.from_toml(PUSHED_MASS).with_start("steady")
+    pushed = modelgap.Recording.from_numpy(t, np.column_stack([np.ones_like(t), t]), ["F", "v"])
+    with pytest.raises(modelgap.ConvergenceError, match="no steady state"):
+        modelgap.compare(mass, pushed)
+    # A cloth that diverges: the model cannot be simulated.
+    scene = cloth.scene("corner").resized(3, 3)
+    text = scene.to_toml().replace("dt = 0.01", "dt = 1e99", 1)
+    diverging = cloth.ClothModel(cloth.Scene.from_toml(text))
+    markers = modelgap.Recording.from_numpy(
+        np.array([0.0, 1e99, 2e99]), np.zeros((3, 3)), ["m8.x", "m8.y", "m8.z"]
+    )
+    with pytest.raises(ModelError, match="diverged"):
+        modelgap.compare(diverging, markers)
+    # A marker file with an id past the grid: bad data.
+    path = tmp_path / "m.csv"
+    path.write_text("t,id,x,y,z\n0,4000,0,0,0\n")
+    with pytest.raises(DataError, match="4000"):
+        modelgap.load_recording(path, cloth.ClothModel(scene))

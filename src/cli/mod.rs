@@ -183,6 +183,15 @@ fn bond_exit_code(e: &BondError) -> u8 {
 }
 
 fn core_exit_code(e: &CoreError) -> u8 {
+    // A model's own error through the loop's seam keeps its crate's code.
+    if let Some(domain) = e.model_error() {
+        if let Some(b) = domain.downcast_ref::<BondError>() {
+            return bond_exit_code(b);
+        }
+        if let Some(c) = domain.downcast_ref::<ClothError>() {
+            return cloth_exit_code(c);
+        }
+    }
     match e {
         CoreError::McapWrite { .. } => EXIT_FAILURE,
         _ => EXIT_BAD_INPUT,

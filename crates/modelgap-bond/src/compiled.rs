@@ -288,11 +288,13 @@ impl CompiledModel {
                 }
             }
             let rhs = nalgebra::DVector::from_iterator(n, f.iter().map(|v| -v));
-            let dx = jac.clone().lu().solve(&rhs).ok_or_else(|| {
-                BondError::BadOptions(
-                    "no unique steady state: the Jacobian is singular".to_string(),
-                )
-            })?;
+            let dx = jac
+                .clone()
+                .lu()
+                .solve(&rhs)
+                .ok_or_else(|| BondError::NoSteadyState {
+                    reason: "no unique one: the Jacobian is singular".to_string(),
+                })?;
             let mut step = 0.0_f64;
             for (xi, d) in x.iter_mut().zip(dx.iter()) {
                 *xi += d;
@@ -305,9 +307,9 @@ impl CompiledModel {
                 return Ok(x);
             }
         }
-        Err(BondError::BadOptions(
-            "steady state: Newton's method did not converge".to_string(),
-        ))
+        Err(BondError::NoSteadyState {
+            reason: "Newton's method did not converge".to_string(),
+        })
     }
 
     /// The error for state `component` (or its derivative) found not finite

@@ -261,6 +261,13 @@ pub enum BondError {
     /// Simulation options are invalid.
     #[error("bad simulation options: {0}")]
     BadOptions(String),
+    /// No steady state was found to start from (Newton's method did not converge, or the
+    /// Jacobian is singular: no unique one).
+    #[error("no steady state to start from: {reason}")]
+    NoSteadyState {
+        /// Why not.
+        reason: String,
+    },
     /// The ODE solver failed. The solver's error is part of the message and
     /// not a separate cause, so that it is printed once.
     #[error("simulation failed: {0}")]

@@ -196,20 +196,20 @@ impl From<BondGraph> for BondModel {
 
 /// The loop's error for a failed prediction or edit, naming the effects.
 fn model_error(effects: &[(&Candidate, &[f64])], e: BondError) -> CoreError {
-    let message = match e {
+    let context = match e {
         // Already names the candidate and the parameter.
-        BondError::BadEffect { .. } => e.to_string(),
-        _ if effects.is_empty() => e.to_string(),
-        _ => format!(
-            "with {}: {e}",
+        BondError::BadEffect { .. } => None,
+        _ if effects.is_empty() => None,
+        _ => Some(format!(
+            "with {}",
             effects
                 .iter()
                 .map(|(c, v)| format!("{} at {v:?}", c.id))
                 .collect::<Vec<_>>()
                 .join(", ")
-        ),
+        )),
     };
-    CoreError::Model { message }
+    CoreError::from_model(context, e)
 }
 
 /// The first value of each model input in the recording (its default when
@@ -276,7 +276,6 @@ fn steady_start(
     // A law that is NaN where Newton starts is named, not reported as "no convergence".
     model.check_finite(0.0, &guess, &u0, true)?;
     newton(model, &u0, &guess, &held_states(graph, model))
-        .map_err(|e| BondError::BadOptions(format!("no steady state to start from: {e}")))
 }
 
 /// Damped Newton for `f(x, u) = 0` over the states not in `held` (those stay 0).
@@ -326,7 +325,9 @@ fn newton(model: &CompiledModel, u: &[f64], x0: &[f64], held: &[usize]) -> Resul
             .clone()
             .lu()
             .solve(&rhs)
-            .ok_or_else(|| BondError::BadOptions("the Jacobian is singular".to_string()))?;
+            .ok_or_else(|| BondError::NoSteadyState {
+                reason: "the Jacobian is singular".to_string(),
+            })?;
         let rel = free
             .iter()
             .zip(step.iter())
@@ -353,9 +354,9 @@ fn newton(model: &CompiledModel, u: &[f64], x0: &[f64], held: &[usize]) -> Resul
             return Ok(x);
         }
     }
-    Err(BondError::BadOptions(
-        "Newton's method did not converge".to_string(),
-    ))
+    Err(BondError::NoSteadyState {
+        reason: "Newton's method did not converge".to_string(),
+    })
 }
 
 impl Model for BondModel {

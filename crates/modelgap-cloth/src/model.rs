@@ -664,20 +664,21 @@ fn nearest_vertex(col: f64, row: f64, nx: usize, nz: usize) -> u32 {
 }
 
 /// The loop's error for a failed prediction or edit, naming the effects.
-fn model_error(effects: &[(&Candidate, &[f64])], e: &ClothError) -> CoreError {
-    let message = if effects.is_empty() {
-        e.to_string()
-    } else {
+fn model_error(effects: &[(&Candidate, &[f64])], e: ClothError) -> CoreError {
+    let context = (!effects.is_empty()).then(|| {
         format!(
-            "with {}: {e}",
+            "with {}",
             effects
                 .iter()
                 .map(|(c, v)| format!("{} at {v:?}", c.id))
                 .collect::<Vec<_>>()
                 .join(", ")
         )
-    };
-    CoreError::Model { message }
+    });
+    match e {
+        ClothError::Core(core) if context.is_none() => core,
+        other => CoreError::from_model(context, other),
+    }
 }
 
 /// Running maximum over ±`half` samples.
@@ -711,12 +712,13 @@ impl Model for ClothModel {
             .map_err(crate::report::story::seam)?;
         let markers = crate::markers::read_markers_path_within(path, n).map_err(|e| match e {
             ClothError::Core(core) => core,
-            other => CoreError::Model {
-                message: format!(
-                    "reading markers for scene {} ({} x {} grid): {other}",
+            other => CoreError::from_model(
+                Some(format!(
+                    "reading markers for scene {} ({} x {} grid)",
                     self.scene.name, self.scene.cloth.nx, self.scene.cloth.nz
-                ),
-            },
+                )),
+                other,
+            ),
         })?;
         markers_to_recording(&markers).map_err(crate::report::story::seam)
     }
@@ -753,7 +755,7 @@ impl Model for ClothModel {
         effects: &[(&Candidate, &[f64])],
     ) -> modelgap_core::Result<Prediction> {
         self.predict_settings(rec, effects, &self.settings)
-            .map_err(|e| model_error(effects, &e))
+            .map_err(|e| model_error(effects, e))
     }
 
     fn candidates(&self) -> Vec<Candidate> {
@@ -773,7 +775,7 @@ impl Model for ClothModel {
             .iter()
             .map(|e| (&e.candidate, e.values.as_slice()))
             .collect();
-        let scene = self.edited(&pairs).map_err(|e| model_error(&pairs, &e))?;
+        let scene = self.edited(&pairs).map_err(|e| model_error(&pairs, e))?;
         let mut added = self.added.clone();
         added.extend(effects.iter().map(|e| e.to_string()));
         Ok(Box::new(ClothModel {
@@ -825,7 +827,7 @@ impl Model for ClothModel {
         for settings in [half, perturbed, half_perturbed] {
             let other = self
                 .predict_settings(rec, &[], &settings)
-                .map_err(|e| model_error(&[], &e))?;
+                .map_err(|e| model_error(&[], e))?;
             for ((l, a), b) in largest.iter_mut().zip(&nominal.values).zip(&other.values) {
                 for ((l, a), b) in l.iter_mut().zip(a).zip(b) {
                     *l = l.max((a - b).abs());

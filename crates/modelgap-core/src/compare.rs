@@ -255,9 +255,7 @@ pub fn compare_prediction_with_spread(
         let measured = rec.values(&name)?.to_vec();
         let predicted = prediction
             .get(&name)
-            .ok_or_else(|| CoreError::Model {
-                message: format!("the model did not predict output '{name}'"),
-            })?
+            .ok_or_else(|| CoreError::model(format!("the model did not predict output '{name}'")))?
             .to_vec();
         if predicted.len() != measured.len() {
             return Err(CoreError::LengthMismatch {

@@ -203,9 +203,7 @@ impl From<BadValues> for CoreError {
     /// A model cannot be edited with these values: [`CoreError::Model`] with
     /// the same message.
     fn from(e: BadValues) -> CoreError {
-        CoreError::Model {
-            message: e.to_string(),
-        }
+        CoreError::from_model(None, e)
     }
 }
 

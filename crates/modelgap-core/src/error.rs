@@ -318,12 +318,17 @@ pub enum CoreError {
         path: Option<PathBuf>,
     },
 
-    /// A model (a bond graph, a cloth scene) could not predict or be edited;
-    /// the message is the domain crate's error, naming the element or parameter.
+    /// A model (a bond graph, a cloth scene, a model written in Python) could not predict
+    /// or be edited; the message is the domain crate's error, naming the element or
+    /// parameter (with the effects it was tried with), and `domain` is that error itself,
+    /// typed ([`CoreError::model_error`] reads it back).
     #[error("{message}")]
     Model {
         /// What went wrong, from the model's own error.
         message: String,
+        /// The model's own error (a `BondError`, a `ClothError`), when there is one. Not
+        /// the error's `source()`: its text is already in `message`.
+        domain: Option<DomainError>,
     },
 
     /// A fit could not run (no parameters, a non-finite residual at the start).
@@ -345,7 +350,45 @@ pub enum CoreError {
     },
 }
 
+/// A model's own error carried through the loop's seam ([`CoreError::Model`]).
+pub type DomainError = Box<dyn std::error::Error + Send + Sync + 'static>;
+
 impl CoreError {
+    /// A model error with a message of its own (no typed error behind it).
+    pub fn model(message: impl Into<String>) -> Self {
+        Self::Model {
+            message: message.into(),
+            domain: None,
+        }
+    }
+
+    /// A model's own error through the seam: its text after `context` (when there is one,
+    /// e.g. the effects it was tried with), the error itself kept typed.
+    pub fn from_model<E: std::error::Error + Send + Sync + 'static>(
+        context: Option<String>,
+        error: E,
+    ) -> Self {
+        let message = match context {
+            Some(c) => format!("{c}: {error}"),
+            None => error.to_string(),
+        };
+        Self::Model {
+            message,
+            domain: Some(Box::new(error)),
+        }
+    }
+
+    /// The model's own error behind a [`CoreError::Model`], to downcast to its crate's type
+    /// (`e.model_error().and_then(|d| d.downcast_ref::<BondError>())`).
+    pub fn model_error(&self) -> Option<&(dyn std::error::Error + Send + Sync + 'static)> {
+        match self {
+            Self::Model {
+                domain: Some(d), ..
+            } => Some(d.as_ref()),
+            _ => None,
+        }
+    }
+
     /// Wraps an I/O error with the file it concerns.
     pub fn io(error: std::io::Error, path: Option<&Path>) -> Self {
         Self::Io {

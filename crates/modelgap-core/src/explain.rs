@@ -267,8 +267,8 @@ impl Target<'_> {
         let pred = self.model.predict_with(self.rec, effects)?;
         let n = self.rec.len();
         for (j, name) in self.names.iter().enumerate() {
-            let p = pred.get(name).ok_or_else(|| CoreError::Model {
-                message: format!("the model did not predict output '{name}'"),
+            let p = pred.get(name).ok_or_else(|| {
+                CoreError::model(format!("the model did not predict output '{name}'"))
             })?;
             for k in 0..n {
                 out[j * n + k] = (self.measured[j][k] - p[k]) / self.sigma[j];

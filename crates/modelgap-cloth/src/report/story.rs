@@ -28,9 +28,7 @@ pub const TOP_MARKERS: usize = 5;
 pub(crate) fn seam(e: ClothError) -> CoreError {
     match e {
         ClothError::Core(core) => core,
-        other => CoreError::Model {
-            message: other.to_string(),
-        },
+        other => CoreError::from_model(None, other),
     }
 }
 

@@ -822,9 +822,7 @@ mod tests {
 
     fn err_above_one(x: &[f64], out: &mut [f64]) -> Result<()> {
         if x[0] > 1.0 {
-            return Err(CoreError::Model {
-                message: format!("cannot simulate x = {}", x[0]),
-            });
+            return Err(CoreError::model(format!("cannot simulate x = {}", x[0])));
         }
         // Flattening residual: the undamped Gauss–Newton step from 0 lands near 3.6.
         for (k, o) in out.iter_mut().enumerate() {
@@ -872,9 +870,7 @@ mod tests {
         // Evaluable only at x = 0 exactly: no finite difference can be formed.
         let p = problem(1, 2, |x: &[f64], out: &mut [f64]| {
             if x[0] != 0.0 {
-                return Err(CoreError::Model {
-                    message: "unstable".into(),
-                });
+                return Err(CoreError::model("unstable"));
             }
             out.fill(1.0);
             Ok(())
