@@ -74,10 +74,10 @@ pub use modelgap_bond as bond;
 pub use modelgap_cloth as cloth;
 pub use modelgap_core::residual::{FailureWindow, NoiseFloor, Residual, ResidualStats, Threshold};
 pub use modelgap_core::{
-    Candidate, CompareOptions, Comparison, CoreError, Effect, EffectKind, EffectParam,
-    ExplainOptions, Explanation, Location, Model, OutputComparison, Prediction, RankedCandidate,
-    Recording, Signal, Verdict, compare, explain, fit, io, json, judge, math, noise, report,
-    residual, story,
+    Calibration, CalibrationOptions, Candidate, CompareOptions, Comparison, CoreError, Effect,
+    EffectKind, EffectParam, ExplainOptions, Explanation, Location, Model, OutputComparison,
+    Prediction, RankedCandidate, Recording, Signal, Verdict, calibrate, compare, explain, fit, io,
+    json, judge, math, noise, report, residual, story,
 };
 
 pub use modelgap_bond::BondError;

@@ -19,6 +19,7 @@
 
 use std::path::Path;
 
+use modelgap_bond::element::Range;
 use modelgap_bond::model::Start;
 pub use modelgap_bond::simulate::Hold;
 use modelgap_bond::{BondModel, file::read_model_path, library};
@@ -62,6 +63,10 @@ pub struct LoadOptions {
     /// How recorded inputs are held between samples (bond graphs). Default zero-order hold,
     /// right for a commanded input.
     pub hold: Hold,
+    /// Parameters to mark unknown for calibration, with their bounds (`None`: the default
+    /// bounds around the value, see [`modelgap_bond::element::Range::around`]), beside those
+    /// the model file marks `free` (bond graphs: `modelgap fit --free k1=0:1`).
+    pub free: Vec<(String, Option<(f64, f64)>)>,
 }
 
 impl Default for LoadOptions {
@@ -70,6 +75,7 @@ impl Default for LoadOptions {
             set: Vec::new(),
             steady_start: false,
             hold: Hold::Zero,
+            free: Vec::new(),
         }
     }
 }
@@ -199,6 +205,25 @@ fn load_bond(path_or_name: &str, opts: &LoadOptions) -> Result<BondModel> {
             source: Box::new(source),
         })?;
     }
+    for (name, bounds) in &opts.free {
+        let value = g
+            .param(name)
+            .map_err(|e| Error::Input(format!("--free {name}: {e}")))?;
+        let range = match bounds {
+            Some((lower, upper)) => Some(Range {
+                lower: *lower,
+                upper: *upper,
+            }),
+            None => Some(Range::around(value, None, None).ok_or_else(|| {
+                Error::Input(format!(
+                    "--free {name}: its value is 0, which gives no default bounds; write \
+                     --free {name}=LO:HI"
+                ))
+            })?),
+        };
+        g.set_free(name, range)
+            .map_err(|e| Error::Input(format!("--free {name}: {e}")))?;
+    }
     let start = if opts.steady_start {
         Start::SteadyState
     } else {
@@ -214,6 +239,12 @@ fn load_cloth(path_or_name: &str, opts: &LoadOptions) -> Result<ClothModel> {
         return Err(Error::Input(format!(
             "--set {name}={value}: --set changes bond-graph models; edit the scene file \
              {path_or_name} instead"
+        )));
+    }
+    if let Some((name, _)) = opts.free.first() {
+        return Err(Error::Input(format!(
+            "--free {name}: a cloth scene has no parameters to calibrate this way; its \
+             candidates fit its material and air"
         )));
     }
     if opts.steady_start || opts.hold != Hold::Zero {

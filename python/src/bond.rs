@@ -320,6 +320,29 @@ impl PyBondModel {
         Ok(())
     }
 
+    /// Marks a parameter unknown, for ``modelgap.fit`` to calibrate within ``bounds``
+    /// (``(lower, upper)``; ``None``: from 0 to 1000 times its value, its sign kept).
+    ///
+    /// Raises ``DataError`` for an unknown parameter, bounds that are not finite and
+    /// ordered or leave out its value, or no bounds for a value of 0.
+    #[pyo3(signature = (name, bounds = None))]
+    fn free(&mut self, name: &str, bounds: Option<(f64, f64)>) -> PyResult<()> {
+        use modelgap::bond::element::Range;
+        let mut g = self.base.graph().clone();
+        let value = g.param(name).map_err(to_py_err)?;
+        let range = match bounds {
+            Some((lower, upper)) => Range { lower, upper },
+            None => Range::around(value, None, None).ok_or_else(|| {
+                crate::errors::data_error(format!(
+                    "{name} is 0, which gives no default bounds: pass bounds=(lower, upper)"
+                ))
+            })?,
+        };
+        g.set_free(name, Some(range)).map_err(to_py_err)?;
+        *self = Self::build(g, self.base.start(), self.hold, self.effects.clone())?;
+        Ok(())
+    }
+
     /// The model's name.
     #[getter]
     fn name(&self) -> String {
@@ -804,6 +827,10 @@ fn hidden_cases() -> Vec<String> {
 
 /// A recording of a built-in motor with a hidden effect (or none, for ``nothing``):
 /// sensor lag and white plus coloured noise included, seeded.
+///
+/// ``case`` is a name of ``hidden_cases()``, ``seed`` the noise seed (non-negative) and
+/// ``duration`` the length (s, positive); samples at 1 kHz. Raises ``DataError`` for an
+/// unknown case or a duration that is not positive. The GIL is released.
 #[pyfunction]
 #[pyo3(signature = (case, seed = 1, duration = 4.0))]
 fn hidden_recording(py: Python<'_>, case: &str, seed: u64, duration: f64) -> PyResult<PyRecording> {

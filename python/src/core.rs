@@ -778,8 +778,27 @@ impl PyExplanation {
 
 /// Simulates the model on the recording's inputs and holds it against its outputs.
 ///
-/// ``predictability`` widens the failure band by the model's own predictability band where
-/// it has one (a cloth model near a snap), so only failures beyond it count.
+/// ``model`` is a ``BondModel``, a ``ClothModel`` or a model written in Python
+/// (``modelgap.ModelLike``); ``rec`` a ``Recording`` of its inputs and measured outputs.
+/// Every output both share is compared: residual statistics, the noise floor and the
+/// windows where the residual leaves its band. Returns a ``Comparison``. The GIL is
+/// released while the model runs.
+///
+/// - ``noise``: known noise floors, output name to σ in the output's unit (positive and
+///   finite); the others are estimated from the measurement's high-frequency part, and
+///   names that are not compared outputs are ignored.
+/// - ``band_sigmas``: the half-width of the failure band in noise floors (positive).
+/// - ``band_fraction``: instead, the paper's band: this fraction of the magnitude of the
+///   prediction's steady state (the mean of its last 10 %).
+/// - ``min_window``: the shortest failure window (s); excursions closer than it merge and
+///   shorter ones are dropped. Default five mean sample periods.
+/// - ``predictability``: widens the failure band by the model's own predictability band
+///   where it has one (a cloth model near a snap), so only failures beyond it count.
+///
+/// Raises ``DataError`` for a bad option or a recording that measures none of the model's
+/// outputs, ``ModelError`` or ``ConvergenceError`` when the model cannot be simulated,
+/// ``TypeError`` for an object that is not a model; an exception other than ``ModelError``
+/// raised by a Python model's ``predict`` comes back as itself.
 #[pyfunction(name = "compare")]
 #[pyo3(signature = (model, rec, *, noise = None, band_sigmas = 4.0, band_fraction = None, min_window = None, predictability = true))]
 #[allow(clippy::too_many_arguments)] // keyword-only options of the Python API
@@ -810,6 +829,36 @@ fn py_compare(
 }
 
 /// Fits every candidate effect the model offers to the recording and says which is missing.
+///
+/// ``model`` is a ``BondModel``, a ``ClothModel`` or a model written in Python
+/// (``modelgap.ModelLike``); ``rec`` a ``Recording`` of its inputs and measured outputs.
+/// Every candidate is fitted (in parallel, with the GIL released) to the residual weighted
+/// by the noise floors and scored by the error it removes, penalised by its number of
+/// parameters (a BIC difference). The best is chosen when its score beats
+/// ``significance``; when it leaves the residual above the noise floor (RMS above 1.3 × the
+/// floor, or not noise-like), a second effect is fitted jointly on top of it. Returns an
+/// ``Explanation``; a candidate whose fit fails is ranked last with its error, not raised.
+///
+/// - ``noise``: known noise floors, output name to σ in the output's unit (positive and
+///   finite); they weight the fits and are what the verdict judges against. The others are
+///   estimated; names that are not outputs of the model are ignored.
+/// - ``significance``: the score the best candidate must beat to be chosen, the gain a
+///   second effect must add, and the margin by which a candidate with more parameters must
+///   beat a simpler one to rank above it. Default 10 ("very strong evidence").
+/// - ``max_effects``: with 2 (the default) a second effect may be chosen, with 1 at most
+///   one; larger values act as 2 and 0 as 1.
+/// - ``only``: the candidate ids to fit (for the second effect too); ``None`` or an empty
+///   list fits all, ids that match no candidate are ignored.
+/// - ``progress``: ``progress(done, total)`` with the candidate fits finished and the
+///   number to fit, called on the calling thread when the counts changed (polled every
+///   50 ms, so some counts are skipped); second-effect fits are not counted. An exception
+///   it raises stops the fits and is raised once they have stopped.
+///
+/// Raises ``DataError`` for a bad option or a recording that measures none of the model's
+/// outputs, ``ModelError`` or ``ConvergenceError`` when the model as given cannot be
+/// simulated, ``KeyboardInterrupt`` on Ctrl-C (the fits stop; no explanation is returned),
+/// ``TypeError`` for an object that is not a model; an exception other than ``ModelError``
+/// raised by a Python model's ``predict`` comes back as itself.
 #[pyfunction(name = "explain")]
 #[pyo3(signature = (model, rec, *, noise = None, significance = 10.0, max_effects = 2, only = None, progress = None))]
 #[allow(clippy::too_many_arguments)] // keyword-only options of the Python API
@@ -852,6 +901,12 @@ fn py_explain(
 }
 
 /// Writes ``report.html`` and ``comparison.mcap`` into ``dir``; returns the page's path.
+///
+/// ``dir`` is created when missing. ``before`` is the comparison of the model as given,
+/// ``explanation`` (optional) the explanation of the same recording and ``after``
+/// (optional) the comparison of the fixed model. ``comparison.mcap`` holds the measured and
+/// predicted signals for Foxglove, time shifted to start at 0. Raises ``DataError`` when a
+/// file cannot be written. The GIL is released.
 #[pyfunction(name = "write_report")]
 #[pyo3(signature = (dir, before, explanation = None, after = None))]
 fn py_write_report(

@@ -109,6 +109,7 @@ fn bond_kind(e: &BondError) -> Kind {
         | BondError::BadInput { .. }
         | BondError::BadOptions(_)
         | BondError::BadParameter { .. }
+        | BondError::BadRange { .. }
         | BondError::UnphysicalParameter { .. }
         | BondError::TooLarge { .. }
         | BondError::UnknownParameter { .. }

@@ -8,6 +8,7 @@
 use pyo3::prelude::*;
 
 mod bond;
+mod calibrate;
 mod cloth;
 mod convert;
 // The file is `core.rs` (STYLE §1); the module may not be called `core`, which would
@@ -25,5 +26,6 @@ fn _modelgap(m: &Bound<'_, PyModule>) -> PyResult<()> {
     bond::register(m)?;
     cloth::register(m)?;
     model::register(m)?;
+    calibrate::register(m)?;
     Ok(())
 }

@@ -40,6 +40,11 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// A parameter of a candidate effect: its name, unit, start value, bounds and typical size
 /// (the fit's scale, which also sets its finite-difference steps: give it even when the
 /// start value is 0).
+///
+/// ``EffectParam(name, *, lower, upper, initial=None, scale=None, unit="")``: finite bounds
+/// with ``lower < upper`` (in ``unit``), ``initial`` within them (default their midpoint),
+/// ``scale`` positive (default a tenth of ``upper - lower``). Raises ``DataError`` for
+/// values that break these rules.
 #[pyclass(name = "EffectParam", module = "modelgap", frozen, get_all)]
 #[derive(Clone)]
 pub struct PyEffectParam {
@@ -121,6 +126,10 @@ impl From<&PyEffectParam> for EffectParam {
 /// An effect a model may be missing: a stable ``id``, a plain ``name``, its ``kind``
 /// (``missing-element``, ``parameter-deviation`` or ``abrupt-change``), where it acts and
 /// its parameters (``EffectParam``).
+///
+/// ``Candidate(id, name, params, *, kind="missing-element", acts_on="")``, with at least
+/// one parameter; what a Python model's ``candidates()`` lists. Raises ``DataError`` for
+/// another ``kind`` or no parameter.
 #[pyclass(name = "Candidate", module = "modelgap", frozen)]
 #[derive(Clone)]
 pub struct PyCandidate {
@@ -141,6 +150,7 @@ impl PyCandidate {
         let kind = match kind {
             "missing-element" => EffectKind::MissingElement,
             "parameter-deviation" => EffectKind::ParameterDeviation,
+            "calibration" => EffectKind::Calibration,
             "abrupt-change" => EffectKind::AbruptChange,
             other => {
                 return Err(data_error(format!(
@@ -506,6 +516,7 @@ fn load_model(
         set: set.unwrap_or_default().into_iter().collect(),
         steady_start,
         hold: hold_kind,
+        free: Vec::new(),
     };
     let name = model.to_owned();
     let loaded = detached(py, move || {

@@ -182,7 +182,7 @@ pub fn run(args: &FixArgs) -> anyhow::Result<()> {
 /// # Errors
 ///
 /// The file cannot be written; it does not read back (a bug).
-fn write_checked(out: &Path, text: &str) -> anyhow::Result<()> {
+pub(super) fn write_checked(out: &Path, text: &str) -> anyhow::Result<()> {
     use std::io::Write as _;
     let mut file = modelgap::io::atomic::AtomicFile::create(out)
         .with_context(|| format!("writing the new model to {}", out.display()))?;

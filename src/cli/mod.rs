@@ -16,6 +16,7 @@ mod demo;
 mod diagnose;
 mod equations;
 mod explain;
+mod fit;
 mod fix;
 mod format;
 mod graph;
@@ -50,6 +51,9 @@ enum Command {
     Explain(explain::ExplainArgs),
     /// Add the missing effect: write the new model file and show the error before -> after
     Fix(fix::FixArgs),
+    /// Calibrate the model's free parameters and initial states on a recording and write the
+    /// calibrated model file
+    Fit(fit::FitArgs),
     /// Bond graphs: equations, simulation, causal graph, causality, diagnosis
     #[command(subcommand)]
     Bond(BondCommand),
@@ -104,6 +108,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Compare(args) => compare::run(&args),
         Command::Explain(args) => explain::run(&args),
         Command::Fix(args) => fix::run(&args),
+        Command::Fit(args) => fit::run(&args),
         Command::Demo(args) => demo::run(&args),
     }
 }

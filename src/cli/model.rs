@@ -7,12 +7,12 @@ use std::path::Path;
 
 use anyhow::Context as _;
 use clap::Args;
-use modelgap::Recording;
 use modelgap::bond::BondGraph;
 use modelgap::bond::compiled::CompiledModel;
 use modelgap::bond::file::read_model_path;
 use modelgap::bond::library::{self, BUILTINS};
 use modelgap::io::read_recording_path;
+use modelgap::{LoadOptions, Recording};
 
 use super::BadInput;
 use super::format::num;
@@ -28,6 +28,18 @@ pub struct ModelArgs {
     /// Set a parameter, or an input's default value, before anything else (repeatable)
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_assignment)]
     pub set: Vec<Assignment>,
+}
+
+impl ModelArgs {
+    /// The loader's options: these `--set`s, then the start and input hold given.
+    pub fn load_options(&self, steady_start: bool, hold: modelgap::load::Hold) -> LoadOptions {
+        LoadOptions {
+            set: self.set.iter().map(|a| (a.name.clone(), a.value)).collect(),
+            steady_start,
+            hold,
+            free: Vec::new(),
+        }
+    }
 }
 
 /// A `NAME=VALUE` pair of `--set`.

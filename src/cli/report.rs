@@ -22,8 +22,8 @@ use modelgap::load::Hold;
 pub use modelgap::story::ReportParts;
 use modelgap::story::Story;
 use modelgap::{
-    CompareOptions, Comparison, ExplainOptions, Explanation, LoadOptions, Model, Recording,
-    compare, explain, load_model, load_recording,
+    CompareOptions, Comparison, ExplainOptions, Explanation, Model, Recording, compare, explain,
+    load_model, load_recording,
 };
 use serde_json::Value;
 
@@ -205,16 +205,7 @@ impl Loaded {
 /// measures none of the model's outputs (naming both sides) and a `--noise` for an output
 /// the model does not predict; model and recording read errors, with the file in the context.
 pub fn load_loop(args: &LoopArgs) -> anyhow::Result<Loaded> {
-    let opts = LoadOptions {
-        set: args
-            .model
-            .set
-            .iter()
-            .map(|a| (a.name.clone(), a.value))
-            .collect(),
-        steady_start: args.steady_start,
-        hold: args.hold.into(),
-    };
+    let opts = args.model.load_options(args.steady_start, args.hold.into());
     let model = load_model(&args.model.model, &opts).map_err(|e| match e {
         // "setting L = 0" says which --set already.
         modelgap::Error::Set { .. } => anyhow::Error::new(e),

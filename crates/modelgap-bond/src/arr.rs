@@ -355,9 +355,21 @@ fn constraints(g: &BondGraph, eqs: &Equations) -> Vec<Constraint> {
         });
     }
     for o in &eqs.outputs {
+        if let Some(def) = &o.definition {
+            // The sensor's own law (a gain, an offset): its parameters are
+            // faults of the sensor.
+            out.push(Constraint {
+                element: o.name.clone(),
+                rule: Rule::Equation(EquationKind::Law),
+                target: o.var,
+                rhs: def.clone(),
+                faults: def.params(),
+            });
+        }
         let element = (g.outputs().iter())
             .find(|x| x.name == o.name)
-            .map_or_else(|| o.name.clone(), |x| x.measured.element().to_string());
+            .and_then(|x| x.measured.element())
+            .map_or_else(|| o.name.clone(), str::to_string);
         out.push(Constraint {
             element,
             rule: Rule::Sensor,

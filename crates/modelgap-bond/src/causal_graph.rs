@@ -185,19 +185,28 @@ impl CausalGraph {
         let mut param_effects = Vec::new();
         let mut inputs = Vec::new();
         let mut nodes = std::collections::BTreeSet::new();
-        for eq in &eqs.equations {
-            nodes.insert(eq.target);
-            let params: Vec<String> = eq.rhs.params().into_iter().collect();
-            for v in eq.rhs.vars() {
+        // Every rule `target := rhs`: the causal equations, then the outputs
+        // given as expressions (a sensor's gain and offset).
+        let rules = (eqs
+            .equations
+            .iter()
+            .map(|eq| (eq.target, &eq.rhs, Some(eq.kind))))
+        .chain(
+            (eqs.outputs.iter()).filter_map(|o| o.definition.as_ref().map(|d| (o.var, d, None))),
+        );
+        for (target, rhs, kind) in rules {
+            nodes.insert(target);
+            let params: Vec<String> = rhs.params().into_iter().collect();
+            for v in rhs.vars() {
                 nodes.insert(v);
-                let label = match linear_form(&eq.rhs, &[Expr::Var(v)]) {
+                let label = match linear_form(rhs, &[Expr::Var(v)]) {
                     Some((c, _)) => c[0].simplify().to_string(),
-                    None => format!("d{}/d{v}", eq.target),
+                    None => format!("d{target}/d{v}"),
                 };
                 edges.push(CausalEdge {
                     from: v,
-                    to: eq.target,
-                    sign: op.sign_wrt_var(&eq.rhs, v),
+                    to: target,
+                    sign: op.sign_wrt_var(rhs, v),
                     integrating: false,
                     label,
                     params: params.clone(),
@@ -206,25 +215,25 @@ impl CausalGraph {
             for p in &params {
                 param_effects.push(ParamEffect {
                     param: p.clone(),
-                    on: eq.target,
-                    sign: op.sign_wrt_param(&eq.rhs, p),
+                    on: target,
+                    sign: op.sign_wrt_param(rhs, p),
                 });
             }
             // The modulus of a modulated element (an MTF's duty cycle) can be
             // faulty like a parameter: it is a candidate under its input's name.
-            if eq.kind == EquationKind::Law {
-                for i in eq.rhs.inputs() {
-                    let sign = op.sign_wrt_input(&eq.rhs, &i);
+            if kind == Some(EquationKind::Law) {
+                for i in rhs.inputs() {
+                    let sign = op.sign_wrt_input(rhs, &i);
                     param_effects.push(ParamEffect {
                         param: i,
-                        on: eq.target,
+                        on: target,
                         sign,
                     });
                 }
             }
-            if eq.kind == EquationKind::Source {
-                for i in eq.rhs.inputs() {
-                    inputs.push((i, eq.target));
+            if kind == Some(EquationKind::Source) {
+                for i in rhs.inputs() {
+                    inputs.push((i, target));
                 }
             }
         }

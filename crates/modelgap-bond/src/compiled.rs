@@ -43,6 +43,11 @@ pub struct CompiledModel {
     pub state_names: Vec<String>,
     /// What each state is (`the momentum of I:L`), in state order.
     pub state_descriptions: Vec<String>,
+    /// The storage element of each state, in state order.
+    pub state_elements: Vec<String>,
+    /// Where simulations start unless told otherwise: the graph's initial
+    /// states (0 for those it does not give), in state order.
+    pub initial_state: Vec<f64>,
     /// The element laws in evaluation order, to name one that is not finite.
     laws: Vec<LawSite>,
     /// Input names, in input order (the graph's order).
@@ -97,18 +102,38 @@ impl CompiledModel {
                 next - 1
             });
         }
+        for o in eqs.outputs.iter().filter(|o| o.definition.is_some()) {
+            slots.insert(o.var, next);
+            next += 1;
+        }
         let mut builder = TapeBuilder::new(next);
         let mut is_lti = true;
         let mut deps: BTreeMap<Var, Dep> = eqs.states.iter().map(|s| (s.var, Dep::State)).collect();
-        for &i in &eqs.order {
-            let eq = &eqs.equations[i];
-            let dst = slots[&eq.target];
-            if !affine_in_slots(&eq.rhs) {
+        // Every assignment in evaluation order: the causal equations, then the outputs given
+        // as expressions (after every variable they may read), with the output's name.
+        let rules = (eqs.order.iter())
+            .map(|&i| (eqs.equations[i].target, &eqs.equations[i].rhs, None))
+            .chain((eqs.outputs.iter()).filter_map(|o| {
+                (o.definition.as_ref()).map(|d| (o.var, d, Some(o.name.as_str())))
+            }));
+        for (target, rhs, output) in rules {
+            let dst = slots[&target];
+            if !affine_in_slots(rhs) {
                 is_lti = false;
             }
-            let d = dependence(&eq.rhs, &deps);
-            deps.insert(eq.target, d);
-            builder.assign(dst, &eq.rhs, &mut |leaf: &Expr| -> Result<Leaf> {
+            let d = dependence(rhs, &deps);
+            deps.insert(target, d);
+            let unbound = |detail: String| match output {
+                Some(name) => BondError::BadOutput {
+                    output: name.to_string(),
+                    detail,
+                },
+                None => BondError::BadLaw {
+                    element: target.to_string(),
+                    detail,
+                },
+            };
+            builder.assign(dst, rhs, &mut |leaf: &Expr| -> Result<Leaf> {
                 match leaf {
                     Expr::Param(name) => g.param(name).map(Leaf::Const),
                     Expr::Input(name) => input_slot
@@ -118,21 +143,13 @@ impl CompiledModel {
                             input: name.clone(),
                             detail: "is not declared by the model".to_string(),
                         }),
-                    Expr::Var(v) => {
-                        slots
-                            .get(v)
-                            .map(|&s| Leaf::Slot(s))
-                            .ok_or_else(|| BondError::BadLaw {
-                                element: format!("{v}"),
-                                detail: "variable is used before any equation defines it"
-                                    .to_string(),
-                            })
-                    }
-                    Expr::Time => Ok(Leaf::Slot(0)),
-                    other => Err(BondError::BadLaw {
-                        element: format!("{other:?}"),
-                        detail: "unbound name in a derived equation".to_string(),
+                    Expr::Var(v) => slots.get(v).map(|&s| Leaf::Slot(s)).ok_or_else(|| {
+                        unbound(format!("{v} is used before any equation defines it"))
                     }),
+                    Expr::Time => Ok(Leaf::Slot(0)),
+                    other => Err(unbound(format!(
+                        "unbound name {other} in a derived equation"
+                    ))),
                 }
             })?;
         }
@@ -182,6 +199,15 @@ impl CompiledModel {
                 })
                 .collect(),
             laws,
+            state_elements: (eqs.states.iter())
+                .map(|s| g.element(s.element).name.clone())
+                .collect(),
+            initial_state: (eqs.states.iter())
+                .map(|s| {
+                    let name = &g.element(s.element).name;
+                    g.initial().get(name).map_or(0.0, |i| i.value)
+                })
+                .collect(),
             input_names: eqs.inputs.clone(),
             input_defaults: eqs
                 .inputs

@@ -162,6 +162,16 @@ pub struct Element {
 }
 
 impl Element {
+    /// The kind as written in model files: `MSe`/`MSf` for a source whose
+    /// value reads a signal (another element's variable), else the kind's
+    /// symbol.
+    pub fn symbol(&self) -> String {
+        match &self.law {
+            Law::Source(e) if !e.signals().is_empty() => format!("M{}", self.kind.symbol()),
+            _ => self.kind.symbol().to_string(),
+        }
+    }
+
     fn new(name: &str, kind: ElementKind, law: Law) -> Element {
         Element {
             name: name.to_string(),
@@ -289,6 +299,55 @@ pub struct Parameter {
     pub unit: String,
     /// A human description.
     pub description: String,
+    /// `Some` when the value is unknown and calibration fits it within
+    /// these bounds (`free = true` in a model file).
+    pub free: Option<Range>,
+}
+
+/// Bounds of an unknown value that calibration fits: `lower ≤ value ≤ upper`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Range {
+    /// Lower bound.
+    pub lower: f64,
+    /// Upper bound.
+    pub upper: f64,
+}
+
+impl Range {
+    /// The bounds a model file gives, or the default around `value` when it
+    /// gives none: a value keeps its sign and may grow or shrink a
+    /// thousandfold (`[0, 1000 v]` for `v > 0`, `[1000 v, 0]` for `v < 0`).
+    /// A nominal value of 0 has no sign or size to go by: `None` (the file
+    /// must give both bounds).
+    pub fn around(value: f64, lower: Option<f64>, upper: Option<f64>) -> Option<Range> {
+        let (lo, hi) = if value > 0.0 {
+            (0.0, 1e3 * value)
+        } else if value < 0.0 {
+            (1e3 * value, 0.0)
+        } else {
+            (f64::NAN, f64::NAN)
+        };
+        let r = Range {
+            lower: lower.unwrap_or(lo),
+            upper: upper.unwrap_or(hi),
+        };
+        (r.lower.is_finite() && r.upper.is_finite()).then_some(r)
+    }
+
+    /// True when `value` lies within the bounds.
+    pub fn contains(&self, value: f64) -> bool {
+        value >= self.lower && value <= self.upper
+    }
+}
+
+/// The state of a storage element at the start of every simulation: its
+/// displacement `q` (a C) or momentum `p` (an I).
+#[derive(Clone, Debug, PartialEq)]
+pub struct InitialState {
+    /// The value at `t = 0` (0: at rest, uncharged).
+    pub value: f64,
+    /// `Some` when the start is unknown and calibration fits it.
+    pub free: Option<Range>,
 }
 
 /// A named input signal the model takes (a source value, a duty cycle).
@@ -303,7 +362,7 @@ pub struct InputSignal {
 }
 
 /// Which variable of the graph an output measures.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Measured {
     /// The effort at an element: a 0-junction's common effort or a one-port's bond effort.
     Effort(String),
@@ -311,19 +370,32 @@ pub enum Measured {
     Flow(String),
     /// The state of a storage element (momentum of an I, displacement of a C).
     State(String),
+    /// An expression of signals (`Tank2.q`), parameters, inputs and `t`: a
+    /// sensor with a gain and an offset (`gain * Tank2.q + offset`), a sum.
+    Expression(Expr),
 }
 
 impl Measured {
-    /// The element the output refers to.
-    pub fn element(&self) -> &str {
+    /// The element the output reads directly; `None` for an expression.
+    pub fn element(&self) -> Option<&str> {
         match self {
-            Measured::Effort(s) | Measured::Flow(s) | Measured::State(s) => s,
+            Measured::Effort(s) | Measured::Flow(s) | Measured::State(s) => Some(s),
+            Measured::Expression(_) => None,
+        }
+    }
+
+    /// The elements the output reads: its element, or every element an
+    /// expression names.
+    pub fn elements(&self) -> Vec<String> {
+        match self {
+            Measured::Expression(e) => e.signals().into_iter().map(|(el, _)| el).collect(),
+            other => other.element().map(str::to_string).into_iter().collect(),
         }
     }
 }
 
 /// A measured output of the model (`i` = flow of the electrical 1-junction).
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Output {
     /// The output's name, as in recordings.
     pub name: String,

@@ -61,8 +61,13 @@ pub struct State {
 pub struct OutputVar {
     /// Output name (`i`, `omega`).
     pub name: String,
-    /// The variable it reads.
+    /// The variable it reads: a bond variable or state, or [`Var::Y`] for an
+    /// output given as an expression.
     pub var: Var,
+    /// For an output given as an expression, the expression in bond
+    /// variables, states, parameters, inputs and `t` that computes
+    /// [`OutputVar::var`].
+    pub definition: Option<Expr>,
 }
 
 /// The causal equations of a bond graph.
@@ -106,6 +111,11 @@ impl Equations {
             }
             element_equations(g, c, id, &mut equations, &mut states)?;
         }
+        // Signals (another element's variable read by a law) become the
+        // variables that causality gave them.
+        for eq in &mut equations {
+            eq.rhs = resolve_signals(g, c, &eq.rhs, &g.element(eq.element).name)?;
+        }
         let inputs: Vec<String> = g.inputs().keys().cloned().collect();
         let outputs = resolve_outputs(g, c)?;
         let order = sort(g, &equations, &states)?;
@@ -126,8 +136,9 @@ impl Equations {
     /// `var` expressed in states, inputs and parameters only, by substituting
     /// the causal equations (simplified).
     pub fn substituted(&self, var: Var) -> Expr {
-        let defs: BTreeMap<Var, &Expr> =
-            self.equations.iter().map(|e| (e.target, &e.rhs)).collect();
+        let defs: BTreeMap<Var, &Expr> = (self.equations.iter().map(|e| (e.target, &e.rhs)))
+            .chain((self.outputs.iter()).filter_map(|o| o.definition.as_ref().map(|d| (o.var, d))))
+            .collect();
         substitute(&Expr::Var(var), &defs).simplify()
     }
 
@@ -185,9 +196,12 @@ impl Equations {
         })
     }
 
-    /// All parameter names the equations use.
+    /// All parameter names the equations and the outputs use.
     pub fn params(&self) -> BTreeSet<String> {
-        self.equations.iter().flat_map(|e| e.rhs.params()).collect()
+        (self.equations.iter().map(|e| &e.rhs))
+            .chain(self.outputs.iter().filter_map(|o| o.definition.as_ref()))
+            .flat_map(Expr::params)
+            .collect()
     }
 }
 
@@ -289,6 +303,8 @@ fn junction_equations(g: &BondGraph, c: &Causality, id: ElementId, out: &mut Vec
     }
 }
 
+/// Binds a law's own names (`e`, `f`, `p`, `q`) to its bond's variables;
+/// signals (`Tank1.q`) are left for [`resolve_signals`].
 fn bind(e: &Expr, bond: BondId) -> Expr {
     let n = bond.number();
     e.map(&mut |x| match x {
@@ -296,10 +312,60 @@ fn bind(e: &Expr, bond: BondId) -> Expr {
             "e" => Var::E(n),
             "f" => Var::F(n),
             "p" => Var::P(n),
-            _ => Var::Q(n),
+            "q" => Var::Q(n),
+            _ => return None,
         })),
         _ => None,
     })
+}
+
+/// The variable `which` (`e`, `f`, `p`, `q`) of an element: a one-port's
+/// bond effort or flow, a junction's common effort (0) or flow (1), an I's
+/// momentum, a C's displacement. `None` when the element has no such single
+/// variable (a two-port, a 1-junction's effort, a resistor's state).
+pub fn element_var(g: &BondGraph, c: &Causality, id: ElementId, which: &str) -> Option<Var> {
+    let el = g.element(id);
+    let bond = if el.kind.is_junction() {
+        strong_bond(g, c, id)?
+    } else if el.kind.is_two_port() {
+        return None;
+    } else {
+        g.ports(id).first()?.0
+    };
+    let n = bond.number();
+    match (which, el.kind) {
+        ("e", ElementKind::One) | ("f", ElementKind::Zero) => None,
+        ("e", _) => Some(Var::E(n)),
+        ("f", _) => Some(Var::F(n)),
+        ("p", ElementKind::I) => Some(Var::P(n)),
+        ("q", ElementKind::C) => Some(Var::Q(n)),
+        _ => None,
+    }
+}
+
+/// Replaces every signal (`Tank1.q`) in `e` by the variable it names.
+///
+/// # Errors
+/// [`BondError::BadLaw`] naming `reader` (the element or output whose law
+/// reads the signal) when the element is unknown or has no such variable.
+pub fn resolve_signals(g: &BondGraph, c: &Causality, e: &Expr, reader: &str) -> Result<Expr> {
+    let mut error = None;
+    let out = e.map(&mut |x| {
+        let Expr::Local(name) = x else { return None };
+        let (element, which) = crate::expr::split_signal(name)?;
+        let var = g.find(element).and_then(|id| element_var(g, c, id, which));
+        if var.is_none() && error.is_none() {
+            error = Some(BondError::BadLaw {
+                element: reader.to_string(),
+                detail: format!("reads the signal '{name}', which names no variable of the model"),
+            });
+        }
+        var.map(Expr::Var)
+    });
+    match error {
+        Some(err) => Err(err),
+        None => Ok(out),
+    }
 }
 
 fn element_equations(
@@ -444,30 +510,34 @@ fn unreachable_law<T>(name: &str) -> Result<T> {
 
 fn resolve_outputs(g: &BondGraph, c: &Causality) -> Result<Vec<OutputVar>> {
     let mut out = Vec::new();
-    for o in g.outputs() {
-        let id = g.require(o.measured.element(), &format!(" in output '{}'", o.name))?;
-        let el = g.element(id);
-        let bond = if el.kind.is_junction() {
-            strong_bond(g, c, id)
-        } else {
-            g.ports(id).first().map(|p| p.0)
+    for (k, o) in g.outputs().iter().enumerate() {
+        if let Measured::Expression(e) = &o.measured {
+            let reader = format!("output '{}'", o.name);
+            out.push(OutputVar {
+                name: o.name.clone(),
+                var: Var::Y(k as u32 + 1),
+                definition: Some(g.resolved(&resolve_signals(g, c, e, &reader)?)),
+            });
+            continue;
+        }
+        let name = o.measured.element().unwrap_or_default();
+        let id = g.require(name, &format!(" in output '{}'", o.name))?;
+        let which = match (&o.measured, g.element(id).kind) {
+            (Measured::Effort(_), _) => "e",
+            (Measured::Flow(_), _) => "f",
+            (_, ElementKind::I) => "p",
+            _ => "q",
         };
-        let Some(b) = bond else {
+        let Some(var) = element_var(g, c, id, which) else {
             return Err(BondError::BadOutput {
                 output: o.name.clone(),
-                detail: format!("element '{}' has no bond", el.name),
+                detail: format!("element '{name}' has no single variable '{which}'"),
             });
-        };
-        let n = b.number();
-        let var = match (&o.measured, el.kind) {
-            (Measured::Effort(_), _) => Var::E(n),
-            (Measured::Flow(_), _) => Var::F(n),
-            (Measured::State(_), ElementKind::I) => Var::P(n),
-            (Measured::State(_), _) => Var::Q(n),
         };
         out.push(OutputVar {
             name: o.name.clone(),
             var,
+            definition: None,
         });
     }
     Ok(out)

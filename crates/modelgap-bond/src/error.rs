@@ -155,6 +155,15 @@ pub enum BondError {
         /// What is wrong.
         detail: String,
     },
+    /// The bounds of a free parameter or initial state are not finite and
+    /// ordered, or leave out its value.
+    #[error("'{name}': {detail}")]
+    BadRange {
+        /// The parameter (`k1`) or initial state (`Tank1(0)`).
+        name: String,
+        /// What is wrong.
+        detail: String,
+    },
     /// A candidate effect cannot be applied: it is unknown to this model, or
     /// a parameter value is missing, not finite or outside its bounds.
     #[error("effect '{candidate}': {detail}")]

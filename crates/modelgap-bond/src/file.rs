@@ -6,7 +6,7 @@
 //!
 //! [parameters]
 //! R = { value = 1000.0, unit = "Ohm", description = "resistor" }
-//! C = { value = 1e-6, unit = "F" }
+//! C = { value = 1e-6, unit = "F", free = true, min = 1e-7, max = 1e-5 }  # unknown: `fit` calibrates it
 //!
 //! [inputs]
 //! V = { default = 5.0, unit = "V" }
@@ -40,13 +40,24 @@
 //! from = "1"
 //! to = "C"
 //!
+//! [initial]               # states at t = 0 (absent: 0); a table with `free = true` is unknown
+//! C = { value = 0.0, free = true, min = -1e-5, max = 1e-5 }
+//!
 //! [[outputs]]
 //! name = "i"
-//! flow = "1"              # or effort = "<element>", state = "<storage element>"
-//! unit = "A"
+//! flow = "1"              # or effort = "<element>", state = "<storage element>",
+//! unit = "A"              # or value = "<expression of signals>" (`2 * C.q + 0.1`)
 //! ```
 //!
-//! Kinds: `Se Sf R C I TF GY MTF MGY 0 1`. For TF/GY/MTF/MGY, `parameter`
+//! A parameter marked `free = true` takes bounds `min`/`max`; without them it
+//! may range from 0 to 1000 times its value, its sign kept (a free value of 0
+//! must give both).
+//!
+//! Kinds: `Se Sf MSe MSf R C I TF GY MTF MGY 0 1`. Laws may read another
+//! element's variable as a signal, `Element.x` with `x` one of `e`, `f`,
+//! `p`, `q` (`k2 * sqrt(Tank1.q)`): a modulated source (`MSe`, `MSf`) is a
+//! source whose value reads signals, and an output may be an expression of
+//! signals (`value = "gain * Tank2.q + offset"`). For TF/GY/MTF/MGY, `parameter`
 //! (also spelt `modulus`) is the modulus; an MTF's modulus names an input.
 //! Every error names the line and column, and the element or bond.
 
@@ -57,7 +68,7 @@ use std::path::Path;
 use serde::Deserialize;
 use toml::Spanned;
 
-use crate::element::{Element, ElementKind, Law, Measured, Output};
+use crate::element::{Element, ElementKind, InitialState, Law, Measured, Output, Range};
 use crate::error::{BondError, Result};
 use crate::expr::{Expr, parse};
 use crate::graph::BondGraph;
@@ -78,6 +89,26 @@ struct ModelFile {
     bonds: Vec<Spanned<BondEntry>>,
     #[serde(default)]
     outputs: Vec<Spanned<OutputEntry>>,
+    #[serde(default)]
+    initial: BTreeMap<String, Spanned<InitialEntry>>,
+}
+
+/// An initial state: a number, or a table with bounds when it is unknown.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum InitialEntry {
+    Value(f64),
+    Table(InitialTable),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct InitialTable {
+    value: f64,
+    #[serde(default)]
+    free: bool,
+    min: Option<f64>,
+    max: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -88,6 +119,33 @@ struct ParamEntry {
     unit: String,
     #[serde(default)]
     description: String,
+    #[serde(default)]
+    free: bool,
+    min: Option<f64>,
+    max: Option<f64>,
+}
+
+/// The bounds of a value marked `free`, or an error saying what to write.
+fn free_range(
+    name: &str,
+    value: f64,
+    free: bool,
+    min: Option<f64>,
+    max: Option<f64>,
+) -> std::result::Result<Option<Range>, String> {
+    if !free {
+        if min.is_some() || max.is_some() {
+            return Err(format!(
+                "'{name}': `min`/`max` bound a free value; add `free = true`"
+            ));
+        }
+        return Ok(None);
+    }
+    Range::around(value, min, max).map(Some).ok_or_else(|| {
+        format!(
+            "'{name}' is free with value 0: give both `min` and `max` (a zero has no sign or size to bound it by)"
+        )
+    })
 }
 
 #[derive(Deserialize)]
@@ -128,6 +186,7 @@ struct OutputEntry {
     flow: Option<String>,
     effort: Option<String>,
     state: Option<String>,
+    value: Option<Spanned<String>>,
     #[serde(default)]
     unit: String,
 }
@@ -203,7 +262,11 @@ pub fn read_model(src: &str) -> Result<BondGraph> {
         let span = p.span();
         let p = p.get_ref();
         g.add_param(name, p.value, &p.unit, &p.description)
-            .map_err(|e| ctx.err(span, e.to_string()))?;
+            .map_err(|e| ctx.err(span.clone(), e.to_string()))?;
+        let range = free_range(name, p.value, p.free, p.min, p.max)
+            .map_err(|m| ctx.err(span.clone(), format!("parameter {m}")))?;
+        g.set_free(name, range)
+            .map_err(|e| ctx.err(span, format!("parameter {e}")))?;
     }
     for (name, i) in &file.inputs {
         let span = i.span();
@@ -216,15 +279,18 @@ pub fn read_model(src: &str) -> Result<BondGraph> {
         let span = entry.span();
         let e = entry.get_ref();
         let name = e.name.get_ref().clone();
-        let kind = ElementKind::from_symbol(e.kind.get_ref()).ok_or_else(|| {
+        // 20-sim's modulated sources: a source whose value reads signals.
+        let modulated = matches!(e.kind.get_ref().as_str(), "MSe" | "MSf");
+        let symbol = e.kind.get_ref().trim_start_matches('M');
+        let symbol = if modulated { symbol } else { e.kind.get_ref() };
+        let kind = ElementKind::from_symbol(symbol).ok_or_else(|| {
             ctx.err(
                 e.kind.span(),
                 format!(
                     "element '{name}': unknown kind '{}' (expected one of {})",
                     e.kind.get_ref(),
-                    ElementKind::ALL
-                        .iter()
-                        .map(|k| k.symbol())
+                    (ElementKind::ALL.iter().map(|k| k.symbol()))
+                        .chain(["MSe", "MSf"])
                         .collect::<Vec<_>>()
                         .join(", ")
                 ),
@@ -332,14 +398,30 @@ pub fn read_model(src: &str) -> Result<BondGraph> {
     }
     for entry in &file.outputs {
         let o = entry.get_ref();
-        let measured = match (&o.flow, &o.effort, &o.state) {
-            (Some(f), None, None) => Measured::Flow(f.clone()),
-            (None, Some(e), None) => Measured::Effort(e.clone()),
-            (None, None, Some(s)) => Measured::State(s.clone()),
+        let measured = match (&o.flow, &o.effort, &o.state, &o.value) {
+            (Some(f), None, None, None) => Measured::Flow(f.clone()),
+            (None, Some(e), None, None) => Measured::Effort(e.clone()),
+            (None, None, Some(s), None) => Measured::State(s.clone()),
+            (None, None, None, Some(v)) => {
+                Measured::Expression(parse(v.get_ref()).map_err(|e| {
+                    let (line, column) = line_col(src, v.span().start);
+                    BondError::File {
+                        line,
+                        column: column + e.column,
+                        message: format!(
+                            "output '{}': cannot parse value '{}': {}",
+                            o.name,
+                            v.get_ref(),
+                            e.message
+                        ),
+                        path: None,
+                    }
+                })?)
+            }
             _ => {
                 return Err(ctx.err(
                     entry.span(),
-                    format!("output '{}': give exactly one of `flow`, `effort`, `state` (an element name)", o.name),
+                    format!("output '{}': give exactly one of `flow`, `effort`, `state` (an element name) or `value` (an expression of signals such as `gain * Tank2.q + offset`)", o.name),
                 ));
             }
         };
@@ -349,6 +431,19 @@ pub fn read_model(src: &str) -> Result<BondGraph> {
             unit: o.unit.clone(),
         })
         .map_err(|err| ctx.err(entry.span(), err.to_string()))?;
+    }
+    for (element, entry) in &file.initial {
+        let span = entry.span();
+        let (value, range) = match entry.get_ref() {
+            InitialEntry::Value(v) => (*v, None),
+            InitialEntry::Table(t) => (
+                t.value,
+                free_range(&format!("{element}(0)"), t.value, t.free, t.min, t.max)
+                    .map_err(|m| ctx.err(span.clone(), format!("initial state {m}")))?,
+            ),
+        };
+        g.set_initial(element, InitialState { value, free: range })
+            .map_err(|e| ctx.err(span, format!("initial state: {e}")))?;
     }
     // Structural checks, located at the element they concern.
     if let Err(err) = g.validate() {
@@ -452,6 +547,14 @@ pub fn write_model(g: &BondGraph) -> String {
             if !p.description.is_empty() {
                 let _ = write!(s, ", description = {}", q(&p.description));
             }
+            if let Some(r) = p.free {
+                let _ = write!(
+                    s,
+                    ", free = true, min = {}, max = {}",
+                    num(r.lower),
+                    num(r.upper)
+                );
+            }
             s.push_str(" }\n");
         }
     }
@@ -476,7 +579,7 @@ pub fn write_model(g: &BondGraph) -> String {
             s,
             "\n[[elements]]\nname = {}\nkind = {}",
             q(&el.name),
-            q(el.kind.symbol())
+            q(&el.symbol())
         );
         match &el.law {
             Law::None => {}
@@ -521,17 +624,38 @@ pub fn write_model(g: &BondGraph) -> String {
             q(&g.element(b.to).name)
         );
     }
+    if !g.initial().is_empty() {
+        let _ = writeln!(s, "\n[initial]");
+        for (element, i) in g.initial() {
+            match i.free {
+                None => {
+                    let _ = writeln!(s, "{} = {}", key(element), num(i.value));
+                }
+                Some(r) => {
+                    let _ = writeln!(
+                        s,
+                        "{} = {{ value = {}, free = true, min = {}, max = {} }}",
+                        key(element),
+                        num(i.value),
+                        num(r.lower),
+                        num(r.upper)
+                    );
+                }
+            }
+        }
+    }
     for o in g.outputs() {
-        let (field, el) = match &o.measured {
-            Measured::Flow(e) => ("flow", e),
-            Measured::Effort(e) => ("effort", e),
-            Measured::State(e) => ("state", e),
+        let (field, text) = match &o.measured {
+            Measured::Flow(e) => ("flow", e.clone()),
+            Measured::Effort(e) => ("effort", e.clone()),
+            Measured::State(e) => ("state", e.clone()),
+            Measured::Expression(e) => ("value", e.to_string()),
         };
         let _ = writeln!(
             s,
             "\n[[outputs]]\nname = {}\n{field} = {}\nunit = {}",
             q(&o.name),
-            q(el),
+            q(&text),
             q(&o.unit)
         );
     }

@@ -16,7 +16,9 @@ use std::fmt;
 
 use modelgap_core::recording::MAX_MAGNITUDE;
 
-use crate::element::{Element, ElementKind, InputSignal, Law, Output, Parameter};
+use crate::element::{
+    Element, ElementKind, InitialState, InputSignal, Law, Output, Parameter, Range,
+};
 use crate::error::{BondError, Result};
 use crate::expr::Expr;
 
@@ -113,6 +115,32 @@ pub struct BondGraph {
     params: BTreeMap<String, Parameter>,
     inputs: BTreeMap<String, InputSignal>,
     outputs: Vec<Output>,
+    /// Initial states by storage element (absent: 0).
+    initial: BTreeMap<String, InitialState>,
+}
+
+/// Checks that `range` is finite, ordered and holds `value`.
+fn check_range(name: &str, value: f64, range: Option<Range>) -> Result<()> {
+    let Some(r) = range else { return Ok(()) };
+    if !(in_range(r.lower) && in_range(r.upper) && r.lower < r.upper) {
+        return Err(BondError::BadRange {
+            name: name.to_string(),
+            detail: format!(
+                "bounds [{}, {}] must be finite with min < max",
+                r.lower, r.upper
+            ),
+        });
+    }
+    if !r.contains(value) {
+        return Err(BondError::BadRange {
+            name: name.to_string(),
+            detail: format!(
+                "its value {value} lies outside its bounds [{}, {}]",
+                r.lower, r.upper
+            ),
+        });
+    }
+    Ok(())
 }
 
 impl BondGraph {
@@ -207,6 +235,7 @@ impl BondGraph {
                 value,
                 unit: unit.to_string(),
                 description: description.to_string(),
+                free: None,
             },
         );
         Ok(())
@@ -326,6 +355,61 @@ impl BondGraph {
                 name: name.to_string(),
                 known: self.params.keys().cloned().collect::<Vec<_>>().join(", "),
             })
+    }
+
+    /// Marks parameter `name` as unknown, to be fitted within `range` by
+    /// calibration (`None`: known again).
+    ///
+    /// # Errors
+    /// [`BondError::UnknownParameter`]; [`BondError::BadParameter`] when the
+    /// bounds are not finite and ordered or leave out the current value.
+    pub fn set_free(&mut self, name: &str, range: Option<Range>) -> Result<()> {
+        let known = self.params.keys().cloned().collect::<Vec<_>>().join(", ");
+        let p = self
+            .params
+            .get_mut(name)
+            .ok_or_else(|| BondError::UnknownParameter {
+                name: name.to_string(),
+                known,
+            })?;
+        check_range(name, p.value, range)?;
+        p.free = range;
+        Ok(())
+    }
+
+    /// The initial states given, by storage element (the others start at 0).
+    pub fn initial(&self) -> &BTreeMap<String, InitialState> {
+        &self.initial
+    }
+
+    /// Sets the state of storage element `element` at `t = 0` (its `q` or
+    /// `p`), fitted by calibration within `free` when given.
+    ///
+    /// # Errors
+    /// [`BondError::UnknownElement`]; [`BondError::BadLaw`] naming the
+    /// element when it is not a C or an I; [`BondError::BadParameter`] for
+    /// a value that is not finite or bounds that leave it out.
+    pub fn set_initial(&mut self, element: &str, state: InitialState) -> Result<()> {
+        let id = self.require(element, " for an initial state")?;
+        if !self.element(id).kind.is_storage() {
+            return Err(BondError::BadLaw {
+                element: element.to_string(),
+                detail: format!(
+                    "is a {}, which has no state to start from (only C and I elements do)",
+                    self.element(id).kind
+                ),
+            });
+        }
+        let label = format!("{element}(0)");
+        if !in_range(state.value) {
+            return Err(BondError::BadParameter {
+                name: label,
+                value: state.value,
+            });
+        }
+        check_range(&label, state.value, state.free)?;
+        self.initial.insert(element.to_string(), state);
+        Ok(())
     }
 
     /// All parameters, by name.
@@ -536,14 +620,36 @@ impl BondGraph {
             self.validate_element(id)?;
         }
         for out in &self.outputs {
-            let id = self
-                .find(out.measured.element())
-                .ok_or_else(|| BondError::BadOutput {
-                    output: out.name.clone(),
-                    detail: format!("refers to unknown element '{}'", out.measured.element()),
-                })?;
-            let el = self.element(id);
             use crate::element::Measured;
+            let bad = |detail: String| BondError::BadOutput {
+                output: out.name.clone(),
+                detail,
+            };
+            if let Measured::Expression(e) = &out.measured {
+                for name in e.params() {
+                    if !self.params.contains_key(&name) && !self.inputs.contains_key(&name) {
+                        return Err(bad(format!(
+                            "its expression names '{name}', which is not a parameter or input of the model"
+                        )));
+                    }
+                }
+                for local in e.locals() {
+                    let Some((element, which)) = crate::expr::split_signal(&local) else {
+                        return Err(bad(format!(
+                            "its expression uses '{local}' alone; name the element (`Tank2.{local}`)"
+                        )));
+                    };
+                    if let Some(detail) = self.signal_problem(element, which) {
+                        return Err(bad(format!("reads '{local}': {detail}")));
+                    }
+                }
+                continue;
+            }
+            let name = out.measured.element().unwrap_or_default();
+            let id = self
+                .find(name)
+                .ok_or_else(|| bad(format!("refers to unknown element '{name}'")))?;
+            let el = self.element(id);
             let ok = match (&out.measured, el.kind) {
                 (Measured::State(_), k) => k.is_storage(),
                 (Measured::Effort(_), ElementKind::One) => false,
@@ -551,22 +657,45 @@ impl BondGraph {
                 (_, k) => !k.is_two_port(),
             };
             if !ok {
-                return Err(BondError::BadOutput {
-                    output: out.name.clone(),
-                    detail: format!(
-                        "element '{}' ({}) has no single {} (a 1-junction has a common flow, a 0-junction a common effort, storage elements a state)",
-                        el.name,
-                        el.kind,
-                        match out.measured {
-                            Measured::Effort(_) => "effort",
-                            Measured::Flow(_) => "flow",
-                            Measured::State(_) => "state",
-                        }
-                    ),
-                });
+                return Err(bad(format!(
+                    "element '{}' ({}) has no single {} (a 1-junction has a common flow, a 0-junction a common effort, storage elements a state)",
+                    el.name,
+                    el.kind,
+                    match out.measured {
+                        Measured::Effort(_) => "effort",
+                        Measured::Flow(_) => "flow",
+                        _ => "state",
+                    }
+                )));
             }
         }
         self.check_coefficients()
+    }
+
+    /// Why `element.which` is not a signal of this model, if it is not: an
+    /// unknown element, or one without that single variable.
+    fn signal_problem(&self, element: &str, which: &str) -> Option<String> {
+        let Some(id) = self.find(element) else {
+            return Some(format!("the model has no element '{element}'"));
+        };
+        let kind = self.element(id).kind;
+        let why = match (which, kind) {
+            (_, k) if k.is_two_port() => {
+                format!("a {k} has two bonds; read the junction or element beside it")
+            }
+            ("e", ElementKind::One) => {
+                "a 1-junction has a common flow, not a single effort".to_string()
+            }
+            ("f", ElementKind::Zero) => {
+                "a 0-junction has a common effort, not a single flow".to_string()
+            }
+            ("e" | "f", _) => return None,
+            ("p", ElementKind::I) | ("q", ElementKind::C) => return None,
+            ("p", k) => format!("only an I has a momentum p; '{element}' is a {k}"),
+            ("q", k) => format!("only a C has a displacement q; '{element}' is a {k}"),
+            (other, _) => format!("'{other}' is not e, f, p or q"),
+        };
+        Some(why)
     }
 
     fn validate_element(&self, id: ElementId) -> Result<()> {
@@ -677,15 +806,27 @@ impl BondGraph {
                 _ => &[],
             };
             for local in e.locals() {
+                if let Some((element, which)) = crate::expr::split_signal(&local) {
+                    if let Some(detail) = self.signal_problem(element, which) {
+                        return Err(BondError::BadLaw {
+                            element: el.name.clone(),
+                            detail: format!("its {field} law reads the signal '{local}': {detail}"),
+                        });
+                    }
+                    continue;
+                }
                 if !allowed.contains(&local.as_str()) {
                     return Err(BondError::BadLaw {
                         element: el.name.clone(),
                         detail: format!(
                             "its {field} law uses '{local}', but may only use {}",
                             if allowed.is_empty() {
-                                "parameters, inputs and t".to_string()
+                                "parameters, inputs, t and signals (`Tank1.q`)".to_string()
                             } else {
-                                format!("'{}', parameters, inputs and t", allowed.join("', '"))
+                                format!(
+                                    "'{}', parameters, inputs, t and signals (`Tank1.q`)",
+                                    allowed.join("', '")
+                                )
                             }
                         ),
                     });
@@ -693,12 +834,13 @@ impl BondGraph {
             }
             let modulated = !e.inputs().is_empty()
                 || e.depends_on_time()
+                || !e.signals().is_empty()
                 || !self.resolved(e).inputs().is_empty();
             if matches!(el.kind, ElementKind::Tf | ElementKind::Gy) && modulated {
                 return Err(BondError::BadLaw {
                     element: el.name.clone(),
                     detail: format!(
-                        "a {} modulus may not depend on inputs or time; use M{}",
+                        "a {} modulus may not depend on inputs, signals or time; use M{}",
                         el.kind, el.kind
                     ),
                 });
@@ -706,7 +848,7 @@ impl BondGraph {
             if matches!(el.kind, ElementKind::Mtf | ElementKind::Mgy) && !modulated {
                 return Err(BondError::BadLaw {
                     element: el.name.clone(),
-                    detail: format!("a {} modulus must follow an input signal", el.kind),
+                    detail: format!("a {} modulus must follow an input, a signal or t", el.kind),
                 });
             }
         }

@@ -40,6 +40,7 @@
 //! [`table7`], [`arr`], [`error`].
 
 pub mod arr;
+pub mod calibration;
 pub mod causality;
 pub mod compiled;
 pub mod effects;

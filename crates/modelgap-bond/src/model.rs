@@ -55,7 +55,8 @@ const STEADY_STEP_TOLERANCE: f64 = 1e-12;
 /// Where a prediction starts.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Start {
-    /// All states zero: at rest, uncharged.
+    /// The model's initial states (its file's `[initial]`; all zero, at
+    /// rest and uncharged, when it gives none).
     #[default]
     Rest,
     /// The steady state under the recording's first input values (Newton).
@@ -139,6 +140,10 @@ impl BondModel {
         let mut graph = self.graph.clone();
         let mut changes = self.changes.clone();
         for (candidate, values) in effects {
+            if candidate.id == crate::calibration::ID {
+                graph = crate::calibration::apply(&graph, candidate, values)?;
+                continue;
+            }
             let (g, ch) =
                 BondEffect::from_candidate(candidate, &graph)?.apply(&graph, candidate, values)?;
             graph = g;
@@ -395,7 +400,7 @@ impl Model for BondModel {
         };
         let u0 = first_inputs(&model, rec);
         let x0 = match self.start {
-            Start::Rest => vec![0.0; model.n_states()],
+            Start::Rest => model.initial_state.clone(),
             Start::SteadyState => match steady_start(&self.graph, &model, rec, None) {
                 Ok(x) => x,
                 Err(_) => return Vec::new(),
@@ -431,6 +436,12 @@ impl Model for BondModel {
         effects::candidates(&self.graph)
     }
 
+    /// The parameters and initial states marked free in the graph (see
+    /// [`crate::calibration`]).
+    fn free_parameters(&self) -> Option<Candidate> {
+        crate::calibration::candidate(&self.graph)
+    }
+
     fn with_effects(&self, effects: &[Effect]) -> modelgap_core::Result<Box<dyn Model>> {
         let pairs: Vec<(&Candidate, &[f64])> = effects
             .iter()
@@ -438,7 +449,13 @@ impl Model for BondModel {
             .collect();
         let (graph, changes) = self.edited(&pairs).map_err(|e| model_error(&pairs, e))?;
         let mut added = self.added.clone();
-        added.extend(effects.iter().map(|e| e.to_string()));
+        added.extend(effects.iter().map(|e| {
+            if e.candidate.id == crate::calibration::ID {
+                format!("calibrated by fit: {e}")
+            } else {
+                format!("added by explain: {e}")
+            }
+        }));
         Ok(Box::new(BondModel {
             graph,
             changes,
@@ -454,7 +471,7 @@ impl Model for BondModel {
     fn to_file_text(&self) -> Option<String> {
         let mut s = String::new();
         for a in &self.added {
-            let _ = writeln!(s, "# added by explain: {a}");
+            let _ = writeln!(s, "# {a}");
         }
         for c in &self.changes {
             let _ = writeln!(

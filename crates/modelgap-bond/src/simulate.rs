@@ -263,7 +263,8 @@ pub struct SimOptions {
     pub atol: f64,
     /// Largest step (s) of the adaptive solvers. Default: unlimited.
     pub max_step: f64,
-    /// Initial state, in state order; default all zero (at rest, uncharged).
+    /// Initial state, in state order; default: the model's own (its file's
+    /// `[initial]` values, all zero when it gives none: at rest, uncharged).
     pub initial_state: Option<Vec<f64>>,
     /// Parameter changes during the run (faults), applied in time order.
     pub changes: Vec<ParamChange>,
@@ -721,7 +722,7 @@ fn simulate_from(
             )));
         }
         Some(x) => x.clone(),
-        None => vec![0.0; n],
+        None => model.initial_state.clone(),
     };
     let t_end = *t_out.last().unwrap_or(&t0);
     check_events(

@@ -21,6 +21,9 @@ pub enum EffectKind {
     AbruptChange,
     /// A physical element the model does not have (friction, a load, a coupling).
     MissingElement,
+    /// The model's own unknowns: parameters marked free and unknown
+    /// initial states, fitted by calibration (see [`crate::calibrate()`]).
+    Calibration,
 }
 
 impl fmt::Display for EffectKind {
@@ -29,6 +32,7 @@ impl fmt::Display for EffectKind {
             EffectKind::ParameterDeviation => "parameter-deviation",
             EffectKind::AbruptChange => "abrupt-change",
             EffectKind::MissingElement => "missing-element",
+            EffectKind::Calibration => "calibration",
         })
     }
 }

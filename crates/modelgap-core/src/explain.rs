@@ -728,6 +728,7 @@ fn kind_rank(k: crate::effect::EffectKind) -> u8 {
         crate::effect::EffectKind::ParameterDeviation => 0,
         crate::effect::EffectKind::MissingElement => 1,
         crate::effect::EffectKind::AbruptChange => 2,
+        crate::effect::EffectKind::Calibration => 3,
     }
 }
 

@@ -54,6 +54,7 @@
 //! - [`math`]: the nalgebra aliases used across modelgap.
 //! - [`error`]: [`CoreError`] and [`Result`].
 
+pub mod calibrate;
 pub mod compare;
 pub mod effect;
 pub mod error;
@@ -70,6 +71,7 @@ pub mod report;
 pub mod residual;
 pub mod story;
 
+pub use calibrate::{Calibration, CalibrationOptions, FittedValue, calibrate};
 pub use compare::{CompareOptions, Comparison, OutputComparison, compare};
 pub use effect::{Candidate, Effect, EffectKind, EffectParam};
 pub use error::{CoreError, Location, Result};

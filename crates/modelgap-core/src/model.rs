@@ -82,6 +82,16 @@ pub trait Model: Send + Sync {
     /// units, initial values and bounds.
     fn candidates(&self) -> Vec<Candidate>;
 
+    /// The model's own unknowns — parameters marked free and initial states
+    /// to be fitted — as one candidate of kind
+    /// [`EffectKind::Calibration`](crate::EffectKind::Calibration) that
+    /// [`Model::predict_with`] and [`Model::with_effects`] accept like any
+    /// effect. [`crate::calibrate()`] fits it. `None` (the default) when the
+    /// model has no unknowns.
+    fn free_parameters(&self) -> Option<Candidate> {
+        None
+    }
+
     /// A new model with the effects built in.
     ///
     /// # Errors

@@ -43,6 +43,7 @@ from typing import (
 import numpy.typing as npt
 
 from ._modelgap import (
+    Calibration,
     Candidate,
     Comparison,
     ConvergenceError,
@@ -59,6 +60,7 @@ from ._modelgap import (
     Recording,
     compare,
     explain,
+    fit,
     load_model,
     load_recording,
     write_report,
@@ -86,13 +88,22 @@ class ModelLike(Protocol):
     """
 
     @property
-    def outputs(self) -> Sequence[str]: ...
+    def outputs(self) -> Sequence[str]:
+        """The names of the measured outputs the model predicts (as in recordings)."""
+        ...
 
     def predict(
         self, recording: Recording, effects: Sequence[Effect]
-    ) -> Mapping[str, npt.ArrayLike]: ...
+    ) -> Mapping[str, npt.ArrayLike]:
+        """The outputs at ``recording``'s times, driven by its inputs, with every
+        ``Effect`` of ``effects`` applied at its ``values``: a dict of output name to an
+        array of one value per sample. Raise ``modelgap.ModelError`` for values the model
+        cannot simulate."""
+        ...
 
-    def candidates(self) -> Sequence[Candidate]: ...
+    def candidates(self) -> Sequence[Candidate]:
+        """The ``Candidate`` effects the model could be missing."""
+        ...
 
 
 Model = Union[bond.BondModel, cloth.ClothModel, ModelLike]
@@ -112,22 +123,27 @@ class WithEffects:
 
     @property
     def outputs(self) -> Sequence[str]:
+        """The wrapped model's outputs."""
         return self.model.outputs
 
     @property
     def inputs(self) -> Sequence[str]:
+        """The wrapped model's inputs (empty when it names none)."""
         return list(getattr(self.model, "inputs", []))
 
     def unit(self, output: str) -> str:
+        """The unit of ``output`` as the wrapped model gives it (``""`` when it gives none)."""
         unit = getattr(self.model, "unit", None)
         return unit(output) if unit is not None else ""
 
     def predict(
         self, recording: Recording, effects: Sequence[Effect]
     ) -> Mapping[str, npt.ArrayLike]:
+        """The wrapped model's prediction with the built-in effects, then ``effects``."""
         return self.model.predict(recording, [*self.effects, *effects])
 
     def candidates(self) -> Sequence[Candidate]:
+        """The wrapped model's candidates."""
         return self.model.candidates()
 
     def __repr__(self) -> str:
@@ -147,6 +163,7 @@ def with_effects(model: _M, effects: Sequence[Effect]) -> _M:
     return WithEffects(model, effects)  # type: ignore[arg-type, return-value]
 
 __all__ = [
+    "Calibration",
     "Candidate",
     "Comparison",
     "ConvergenceError",
@@ -168,6 +185,7 @@ __all__ = [
     "compare",
     "explain",
     "explain_many",
+    "fit",
     "fix",
     "load_model",
     "load_recording",
@@ -190,6 +208,26 @@ def fix(
     (:func:`with_effects`).
 
     When nothing is missing the model comes back unchanged (a new, equal model).
+
+    Args:
+        model: A ``BondModel``, a ``ClothModel`` or a model written in Python
+            (:class:`ModelLike`).
+        rec: The recording: the model's inputs and measured outputs.
+        noise: Known noise floors, output name to σ in the output's unit (as ``explain``).
+        significance: The score the best candidate must beat (as ``explain``).
+        max_effects: 2 lets a second effect be chosen, 1 at most one (as ``explain``).
+        progress: Called as ``progress(done, total)`` with the candidate fits finished (as
+            ``explain``).
+
+    Returns:
+        A new model of the same kind with ``explain``'s chosen effects built in (a
+        :class:`WithEffects` for a Python model without ``with_effects``).
+
+    Raises:
+        DataError: As ``explain``, for bad options or a recording that does not fit.
+        ModelError: When the model cannot be simulated.
+        ConvergenceError: When a bond-graph simulation fails.
+        KeyboardInterrupt: On Ctrl-C.
     """
     ex = explain(
         model,

@@ -56,6 +56,9 @@ pub enum Var {
     Pdot(u32),
     /// Time derivative of the displacement on a bond (`q̇5`), equal to the bond's flow.
     Qdot(u32),
+    /// A measured output given as an expression (`y1 = gain * q5 + offset`),
+    /// by output number (1-based, in the model's order).
+    Y(u32),
 }
 
 impl fmt::Display for Var {
@@ -67,6 +70,7 @@ impl fmt::Display for Var {
             Var::Q(n) => write!(f, "q{n}"),
             Var::Pdot(n) => write!(f, "dp{n}"),
             Var::Qdot(n) => write!(f, "dq{n}"),
+            Var::Y(n) => write!(f, "y{n}"),
         }
     }
 }
@@ -247,7 +251,9 @@ pub enum Expr {
     Input(String),
     /// A bond-graph variable.
     Var(Var),
-    /// A name local to one law before it is bound to a bond (`e`, `f`, `p`, `q`).
+    /// A bond-graph variable named by element, before it is bound to a bond:
+    /// the law's own (`e`, `f`, `p`, `q`) or another element's, a signal
+    /// (`Tank1.q`, see [`Expr::signal`] and [`split_signal`]).
     Local(String),
     /// Simulation time `t` (s).
     Time,
@@ -265,6 +271,12 @@ pub enum Expr {
     Call(Func, Vec<Expr>),
 }
 
+/// A signal's element and variable (`"Tank1.q"` → `("Tank1", "q")`); `None`
+/// for a law's own variable (`"q"`).
+pub fn split_signal(local: &str) -> Option<(&str, &str)> {
+    local.rsplit_once('.')
+}
+
 /// Values that a [`Tape`] reads by slot: everything a law may mention once
 /// the names are resolved.
 pub type SlotMap = BTreeMap<Var, usize>;
@@ -278,6 +290,21 @@ impl Expr {
     /// A named input signal (`Expr::Input`).
     pub fn input(name: impl Into<String>) -> Expr {
         Expr::Input(name.into())
+    }
+
+    /// The variable `var` (`e`, `f`, `p` or `q`) of the element called
+    /// `element`, read as a signal by another element's law or an output.
+    pub fn signal(element: &str, var: &str) -> Expr {
+        Expr::Local(format!("{element}.{var}"))
+    }
+
+    /// The signals (other elements' variables) mentioned, as
+    /// `(element, variable)`, sorted.
+    pub fn signals(&self) -> BTreeSet<(String, String)> {
+        self.locals()
+            .iter()
+            .filter_map(|n| split_signal(n).map(|(e, v)| (e.to_string(), v.to_string())))
+            .collect()
     }
 
     /// True for leaves: numbers, names, variables and time.

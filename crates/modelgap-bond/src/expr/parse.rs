@@ -7,8 +7,13 @@
 //! product := unary (('*' | '/') unary)*
 //! unary   := ('-' | '+') unary | power
 //! power   := primary ('^' unary)?          right-associative, tighter than unary minus
-//! primary := number | name | function '(' sum (',' sum)* ')' | '(' sum ')'
+//! primary := number | name | signal | function '(' sum (',' sum)* ')' | '(' sum ')'
+//! signal  := (name | "'" any name "'") '.' ('e' | 'f' | 'p' | 'q')
 //! ```
+//!
+//! A signal names a variable of another element (`Tank1.q`, `R2.f`,
+//! `'1e'.f` for a name that is not an identifier): a law that reads it is a
+//! modulated law, as 20-sim's activated bonds and modulated sources.
 
 use std::f64::consts::PI;
 
@@ -85,6 +90,10 @@ enum Kind {
     LParen,
     RParen,
     Comma,
+    /// `.` between an element name and the variable it names.
+    Dot,
+    /// An element name in single quotes (`'1e'`), text without the quotes.
+    Quoted,
     End,
 }
 
@@ -103,6 +112,7 @@ impl Token {
             Kind::End => "end of input".to_owned(),
             Kind::Num(_) => format!("number '{}'", self.text),
             Kind::Name => format!("name '{}'", self.text),
+            Kind::Quoted => format!("quoted name '{}'", self.text),
             _ => format!("'{}'", self.text),
         }
     }
@@ -136,6 +146,29 @@ fn lex(src: &str) -> Result<Vec<Token>, ParseError> {
             '(' => Kind::LParen,
             ')' => Kind::RParen,
             ',' => Kind::Comma,
+            '.' if !digit_at(i + 1) => Kind::Dot,
+            '\'' => {
+                let Some(len) = chars[i + 1..].iter().position(|&c| c == '\'') else {
+                    return Err(ParseError {
+                        column,
+                        message: "expected a closing ' after the quoted element name".to_string(),
+                    });
+                };
+                let text: String = chars[i + 1..i + 1 + len].iter().collect();
+                if text.trim().is_empty() {
+                    return Err(ParseError {
+                        column,
+                        message: "expected an element name between the quotes".to_string(),
+                    });
+                }
+                tokens.push(Token {
+                    kind: Kind::Quoted,
+                    text,
+                    column,
+                });
+                i += len + 2;
+                continue;
+            }
             _ if c.is_ascii_digit() || (c == '.' && digit_at(i + 1)) => {
                 let start = i;
                 while digit_at(i) {
@@ -346,6 +379,15 @@ impl Parser {
                 Ok(e)
             }
             Kind::Name if self.peek().kind == Kind::LParen => self.call(&tok),
+            Kind::Name | Kind::Quoted if self.peek().kind == Kind::Dot => self.signal(&tok),
+            Kind::Quoted => {
+                let next = self.peek();
+                Err(next.error(format!(
+                    "expected '.' and e, f, p or q after the element name '{}' but found {}",
+                    tok.text,
+                    next.describe()
+                )))
+            }
             Kind::Name => {
                 if Func::from_name(&tok.text).is_some() {
                     let next = self.peek();
@@ -373,6 +415,20 @@ impl Parser {
                     tok.describe()
                 )))
             }
+        }
+    }
+
+    /// `Element.x`: the variable `x` (e, f, p or q) of another element.
+    fn signal(&mut self, element: &Token) -> Result<Expr, ParseError> {
+        self.bump(); // '.'
+        let tok = self.bump();
+        match (tok.kind, tok.text.as_str()) {
+            (Kind::Name, "e" | "f" | "p" | "q") => Ok(Expr::signal(&element.text, &tok.text)),
+            _ => Err(tok.error(format!(
+                "expected e, f, p or q after '{}.' but found {}",
+                element.text,
+                tok.describe()
+            ))),
         }
     }
 

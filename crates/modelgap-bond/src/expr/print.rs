@@ -96,6 +96,7 @@ pub fn var_latex(v: Var) -> String {
         Var::Q(n) => format!("q_{{{n}}}"),
         Var::Pdot(n) => format!("\\dot{{p}}_{{{n}}}"),
         Var::Qdot(n) => format!("\\dot{{q}}_{{{n}}}"),
+        Var::Y(n) => format!("y_{{{n}}}"),
     }
 }
 
@@ -203,6 +204,29 @@ fn subscript_word(s: &str) -> String {
     }
 }
 
+/// True for a name the parser reads as one name token (`Tank1`, `R_a`).
+fn is_identifier(name: &str) -> bool {
+    name.chars()
+        .next()
+        .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+        && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+/// Text set upright in LaTeX, with its special characters escaped.
+fn latex_text(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '_' | '#' | '$' | '%' | '&' | '{' | '}' => {
+                out.push('\\');
+                out.push(c);
+            }
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
 /// A parameter, input or local name in LaTeX: `beta` → `\beta`,
 /// `tau_L` → `\tau_{L}`, `psi_s` → `\psi_{s}`, `V0` → `V_{0}`,
 /// `k_a_b` → `k_{a,b}`, `Kt` → `\mathit{Kt}`.
@@ -284,6 +308,17 @@ fn render(e: &Expr, style: Style) -> Part {
             }
             Style::Latex => num_latex(*v),
         },
+        Expr::Local(n) if super::split_signal(n).is_some() => {
+            let (element, var) = super::split_signal(n).unwrap_or_default();
+            match style {
+                Style::Text if is_identifier(element) => Part::new(n.clone(), Prec::Atom),
+                Style::Text => Part::new(format!("'{element}'.{var}"), Prec::Atom),
+                Style::Latex => Part::new(
+                    format!("{var}_{{\\mathrm{{{}}}}}", latex_text(element)),
+                    Prec::Atom,
+                ),
+            }
+        }
         Expr::Param(n) | Expr::Input(n) | Expr::Local(n) => match style {
             Style::Text => Part::new(n.clone(), Prec::Atom),
             Style::Latex => Part::new(name_latex(n), Prec::Atom),
