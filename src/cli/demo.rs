@@ -30,7 +30,8 @@ use modelgap::cloth::markers::read_markers_csv;
 use modelgap::cloth::model::{ClothModel, markers_to_recording};
 use modelgap::cloth::scenes::Scene;
 use modelgap::report::format_number as num;
-use modelgap::{RankedCandidate, Recording};
+use modelgap::story::Story;
+use modelgap::{Comparison, RankedCandidate, Recording};
 
 use super::explain::before_after;
 use super::report::{Loaded, ReportParts, report_line, stop_if_interrupted};
@@ -177,18 +178,15 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         }
         Some((_, after)) => {
             out.push_str("\n4. With the effect added to the model:\n\n");
-            for r in &ex.chosen {
-                out.push_str(&format!("   added: {}\n", super::fix::effect_line(r)));
-            }
-            out.push_str("   error before → after:\n");
-            out.push_str(&indent(&story.before_after_text(&before, after)));
             let hidden = case
                 .hidden
                 .iter()
                 .map(|h| (h.id.as_str(), h.values.as_slice()));
-            out.push_str(&truth_text(
-                hidden,
+            out.push_str(&added_text(
+                story,
                 &ex.chosen,
+                (&before, after),
+                hidden,
                 "examples/make_demo_data.rs",
             ));
         }
@@ -301,18 +299,15 @@ fn cloth_story(dir: &Path) -> anyhow::Result<()> {
         }
         Some((_, after)) => {
             out.push_str("\n   With the effect added to the scene:\n");
-            for r in &ex.chosen {
-                out.push_str(&format!("   added: {}\n", super::fix::effect_line(r)));
-            }
-            out.push_str("   error before → after:\n");
-            out.push_str(&indent(&story.before_after_text(&before, after)));
             let hidden = case
                 .hidden
                 .iter()
                 .map(|h| (h.id.as_str(), h.values.as_slice()));
-            out.push_str(&truth_text(
-                hidden,
+            out.push_str(&added_text(
+                story,
                 &ex.chosen,
+                (&before, after),
+                hidden,
                 "examples/make_cloth_demo_data.rs",
             ));
         }
@@ -336,6 +331,25 @@ fn cloth_story(dir: &Path) -> anyhow::Result<()> {
          `modelgap fix --model {CLOTH_SCENE_PATH} --data your.csv --out fixed.toml`.\n"
     ));
     super::print(&out)
+}
+
+/// What the demo prints once the chosen effects are built in: each effect added, the error
+/// before → after, and how the fit compares with what the generator (`maker`) hid.
+fn added_text<'a>(
+    story: &dyn Story,
+    chosen: &[RankedCandidate],
+    (before, after): (&Comparison, &Comparison),
+    hidden: impl IntoIterator<Item = (&'a str, &'a [f64])>,
+    maker: &str,
+) -> String {
+    let mut s = String::new();
+    for r in chosen {
+        s.push_str(&format!("   added: {}\n", super::fix::effect_line(r)));
+    }
+    s.push_str("   error before → after:\n");
+    s.push_str(&indent(&story.before_after_text(before, after)));
+    s.push_str(&truth_text(hidden, chosen, maker));
+    s
 }
 
 /// The hidden truth beside what was found: each hidden candidate as

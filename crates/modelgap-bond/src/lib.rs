@@ -40,7 +40,6 @@
 //! [`table7`], [`arr`], [`error`].
 
 pub mod arr;
-pub mod calibration;
 pub mod causality;
 pub mod compiled;
 pub mod effects;

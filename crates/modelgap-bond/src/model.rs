@@ -140,10 +140,6 @@ impl BondModel {
         let mut graph = self.graph.clone();
         let mut changes = self.changes.clone();
         for (candidate, values) in effects {
-            if candidate.id == crate::calibration::ID {
-                graph = crate::calibration::apply(&graph, candidate, values)?;
-                continue;
-            }
             let (g, ch) =
                 BondEffect::from_candidate(candidate, &graph)?.apply(&graph, candidate, values)?;
             graph = g;
@@ -437,9 +433,9 @@ impl Model for BondModel {
     }
 
     /// The parameters and initial states marked free in the graph (see
-    /// [`crate::calibration`]).
+    /// [`effects::Calibration`]).
     fn free_parameters(&self) -> Option<Candidate> {
-        crate::calibration::candidate(&self.graph)
+        effects::Calibration::of(&self.graph)
     }
 
     fn with_effects(&self, effects: &[Effect]) -> modelgap_core::Result<Box<dyn Model>> {
@@ -450,7 +446,7 @@ impl Model for BondModel {
         let (graph, changes) = self.edited(&pairs).map_err(|e| model_error(&pairs, e))?;
         let mut added = self.added.clone();
         added.extend(effects.iter().map(|e| {
-            if e.candidate.id == crate::calibration::ID {
+            if e.candidate.kind == modelgap_core::EffectKind::Calibration {
                 format!("calibrated by fit: {e}")
             } else {
                 format!("added by explain: {e}")

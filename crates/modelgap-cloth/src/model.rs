@@ -430,18 +430,6 @@ impl SceneScales {
     }
 }
 
-fn param(name: &str, unit: &str, initial: f64, bounds: (f64, f64), scale: f64) -> EffectParam {
-    EffectParam {
-        name: name.to_string(),
-        unit: unit.to_string(),
-        initial,
-        lower: bounds.0,
-        upper: bounds.1,
-        scale,
-        grid: 0,
-    }
-}
-
 /// The candidate effects of a scene (see the [module docs](self)).
 #[must_use]
 pub fn candidates(scene: &Scene) -> Vec<Candidate> {
@@ -460,7 +448,7 @@ pub fn candidates(scene: &Scene) -> Vec<Candidate> {
         name: "aerodynamic drag on the cloth's triangles".into(),
         kind: kind(fx.drag_coefficient),
         acts_on: "cloth".into(),
-        params: vec![param(
+        params: vec![EffectParam::new(
             "drag_coefficient",
             "1",
             fx.drag_coefficient,
@@ -470,10 +458,16 @@ pub fn candidates(scene: &Scene) -> Vec<Candidate> {
     }];
     let mut wind = Vec::new();
     if fx.drag_coefficient == 0.0 {
-        wind.push(param("drag_coefficient", "1", 1.0, cd_bounds, 0.2));
+        wind.push(EffectParam::new(
+            "drag_coefficient",
+            "1",
+            1.0,
+            cd_bounds,
+            0.2,
+        ));
     }
     for (axis, w) in ["wind_x", "wind_y", "wind_z"].iter().zip(fx.wind.iter()) {
-        wind.push(param(axis, "m/s", *w, (-20.0, 20.0), 0.5));
+        wind.push(EffectParam::new(*axis, "m/s", *w, (-20.0, 20.0), 0.5));
     }
     out.push(Candidate {
         id: "wind".into(),
@@ -492,7 +486,7 @@ pub fn candidates(scene: &Scene) -> Vec<Candidate> {
         name: "velocity damping (a force -c m v on every particle)".into(),
         kind: kind(fx.damping),
         acts_on: "cloth".into(),
-        params: vec![param(
+        params: vec![EffectParam::new(
             "damping",
             "1/s",
             fx.damping,
@@ -506,7 +500,7 @@ pub fn candidates(scene: &Scene) -> Vec<Candidate> {
         name: "bending stiffness (springs on the grid's bend pairs)".into(),
         kind: kind(fx.bend_stiffness),
         acts_on: "cloth".into(),
-        params: vec![param(
+        params: vec![EffectParam::new(
             "bend_stiffness",
             "N/m",
             fx.bend_stiffness,
@@ -523,7 +517,7 @@ pub fn candidates(scene: &Scene) -> Vec<Candidate> {
         name: "stretch compliance (the cloth is not quite inextensible)".into(),
         kind: kind(compliance),
         acts_on: "cloth".into(),
-        params: vec![param(
+        params: vec![EffectParam::new(
             "compliance",
             "m/N",
             compliance,
@@ -537,7 +531,7 @@ pub fn candidates(scene: &Scene) -> Vec<Candidate> {
         name: "the cloth's total mass is off".into(),
         kind: EffectKind::ParameterDeviation,
         acts_on: "cloth".into(),
-        params: vec![param(
+        params: vec![EffectParam::new(
             "total_mass",
             "kg",
             total,
@@ -546,10 +540,8 @@ pub fn candidates(scene: &Scene) -> Vec<Candidate> {
         )],
     });
     let (nx, nz) = (scene.cloth.nx, scene.cloth.nz);
-    let mut col = param("col", "1", 0.0, (0.0, (nx - 1) as f64), 1.0);
-    col.grid = nx.min(4);
-    let mut row = param("row", "1", 0.0, (0.0, (nz - 1) as f64), 1.0);
-    row.grid = nz.min(4);
+    let col = EffectParam::new("col", "1", 0.0, (0.0, (nx - 1) as f64), 1.0).with_grid(nx.min(4));
+    let row = EffectParam::new("row", "1", 0.0, (0.0, (nz - 1) as f64), 1.0).with_grid(nz.min(4));
     out.push(Candidate {
         id: "point-mass".into(),
         name: "an extra point mass at a vertex".into(),
@@ -558,7 +550,7 @@ pub fn candidates(scene: &Scene) -> Vec<Candidate> {
         params: vec![
             col,
             row,
-            param("mass", "kg", 0.0, (0.0, total), 5.0 * s.particle_mass),
+            EffectParam::new("mass", "kg", 0.0, (0.0, total), 5.0 * s.particle_mass),
         ],
     });
     for (k, c) in scene.colliders.iter().enumerate() {
@@ -567,7 +559,13 @@ pub fn candidates(scene: &Scene) -> Vec<Candidate> {
             name: format!("friction on collider {k} is off"),
             kind: EffectKind::ParameterDeviation,
             acts_on: format!("collider {k}"),
-            params: vec![param("friction", "1", c.friction, (0.0, 2.0), 0.1)],
+            params: vec![EffectParam::new(
+                "friction",
+                "1",
+                c.friction,
+                (0.0, 2.0),
+                0.1,
+            )],
         });
     }
     out

@@ -129,25 +129,21 @@ struct Problem<'a> {
     candidate: &'a Candidate,
     names: Vec<String>,
     measured: Vec<&'a [f64]>,
-    weight: Vec<f64>,
+    /// Each output's measured standard deviation: what its residual is divided by.
+    sd: Vec<f64>,
 }
 
 impl Problem<'_> {
-    /// Unweighted residuals measured − predicted, output after output.
+    /// `(measured − predicted) / scale` per output, output after output.
+    fn scaled(&self, values: &[f64], scale: &[f64], out: &mut [f64]) -> Result<()> {
+        self.model
+            .predict_with(self.rec, &[(self.candidate, values)])?
+            .residuals_into(&self.names, &self.measured, scale, out)
+    }
+
+    /// Unweighted residuals measured − predicted.
     fn raw(&self, values: &[f64], out: &mut [f64]) -> Result<()> {
-        let pred = self
-            .model
-            .predict_with(self.rec, &[(self.candidate, values)])?;
-        let n = self.rec.len();
-        for (j, name) in self.names.iter().enumerate() {
-            let p = pred.get(name).ok_or_else(|| {
-                CoreError::model(format!("the model did not predict output '{name}'"))
-            })?;
-            for k in 0..n {
-                out[j * n + k] = self.measured[j][k] - p[k];
-            }
-        }
-        Ok(())
+        self.scaled(values, &vec![1.0; self.names.len()], out)
     }
 
     fn rms(&self, raw: &[f64]) -> Vec<(String, f64)> {
@@ -172,14 +168,7 @@ impl ResidualProblem for Problem<'_> {
     }
 
     fn residuals(&self, values: &[f64], out: &mut [f64]) -> Result<()> {
-        self.raw(values, out)?;
-        let n = self.rec.len();
-        for (j, w) in self.weight.iter().enumerate() {
-            for v in &mut out[j * n..(j + 1) * n] {
-                *v *= w;
-            }
-        }
-        Ok(())
+        self.scaled(values, &self.sd, out)
     }
 }
 
@@ -217,16 +206,17 @@ pub fn calibrate(
     let measured: Vec<&[f64]> = (names.iter())
         .filter_map(|o| rec.signal(o).map(|s| s.values.as_slice()))
         .collect();
-    let mut weight = Vec::new();
+    let mut sd = Vec::new();
     for (name, m) in names.iter().zip(&measured) {
         let mean = m.iter().sum::<f64>() / m.len() as f64;
-        let sd = (m.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / m.len() as f64).sqrt();
-        if !(sd > 0.0 && sd.is_finite()) {
+        let spread =
+            (m.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / m.len() as f64).sqrt();
+        if !(spread > 0.0 && spread.is_finite()) {
             return Err(fit_error(format!(
                 "output '{name}' is constant in the recording: nothing to calibrate against"
             )));
         }
-        weight.push(1.0 / sd);
+        sd.push(spread);
     }
     let problem = Problem {
         model,
@@ -234,7 +224,7 @@ pub fn calibrate(
         candidate: &candidate,
         names,
         measured,
-        weight,
+        sd,
     };
     let start = candidate.initial();
     let mut raw = vec![0.0; problem.n_residuals()];

@@ -264,17 +264,12 @@ impl Target<'_> {
 
     /// Weighted residuals of the model with `effects` into `out`.
     fn residuals(&self, effects: &[(&Candidate, &[f64])], out: &mut [f64]) -> Result<()> {
-        let pred = self.model.predict_with(self.rec, effects)?;
-        let n = self.rec.len();
-        for (j, name) in self.names.iter().enumerate() {
-            let p = pred.get(name).ok_or_else(|| {
-                CoreError::model(format!("the model did not predict output '{name}'"))
-            })?;
-            for k in 0..n {
-                out[j * n + k] = (self.measured[j][k] - p[k]) / self.sigma[j];
-            }
-        }
-        Ok(())
+        self.model.predict_with(self.rec, effects)?.residuals_into(
+            &self.names,
+            &self.measured,
+            &self.sigma,
+            out,
+        )
     }
 
     fn rms_per_output(&self, weighted: &[f64]) -> Vec<f64> {

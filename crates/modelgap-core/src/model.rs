@@ -23,6 +23,31 @@ impl Prediction {
             .position(|n| n == name)
             .map(|i| self.values[i].as_slice())
     }
+
+    /// `(measured − predicted) / scale` of each output in `names`, output after
+    /// output, into `out` (`names.len()` × samples long): the residual every fit
+    /// of the loop minimises.
+    ///
+    /// # Errors
+    /// [`crate::CoreError::Model`] when the prediction lacks one of the outputs.
+    pub fn residuals_into(
+        &self,
+        names: &[String],
+        measured: &[&[f64]],
+        scale: &[f64],
+        out: &mut [f64],
+    ) -> Result<()> {
+        let n = out.len() / names.len().max(1);
+        for (j, name) in names.iter().enumerate() {
+            let p = self.get(name).ok_or_else(|| {
+                crate::CoreError::model(format!("the model did not predict output '{name}'"))
+            })?;
+            for (k, o) in out[j * n..(j + 1) * n].iter_mut().enumerate() {
+                *o = (measured[j][k] - p[k]) / scale[j];
+            }
+        }
+        Ok(())
+    }
 }
 
 /// A physical model that can be held against a recording.

@@ -8,8 +8,8 @@ use super::edit::bad;
 use super::scales::Scales;
 use super::tag::Tag;
 use super::{
-    Brush, Cogging, Coulomb, Coupling, Deviation, Factor, Fault, Faulted, Inertia, Junction, Load,
-    Saturation, Viscous,
+    Brush, Calibration, Cogging, Coulomb, Coupling, Deviation, Factor, Fault, Faulted, Inertia,
+    Junction, Load, Saturation, Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::BondGraph;
@@ -40,6 +40,9 @@ pub enum BondEffect {
     Brush(Brush),
     /// `saturation@<I>`: magnetic saturation.
     Saturation(Saturation),
+    /// `calibration`: the graph's free parameters and initial states (never
+    /// on the menu; see [`Calibration`]).
+    Calibration(Calibration),
 }
 
 macro_rules! from_kind {
@@ -52,7 +55,18 @@ macro_rules! from_kind {
     )*};
 }
 from_kind!(
-    Deviation, Factor, Fault, Viscous, Coulomb, Load, Inertia, Coupling, Cogging, Brush, Saturation
+    Deviation,
+    Factor,
+    Fault,
+    Viscous,
+    Coulomb,
+    Load,
+    Inertia,
+    Coupling,
+    Cogging,
+    Brush,
+    Saturation,
+    Calibration
 );
 
 impl BondEffect {
@@ -125,6 +139,9 @@ impl BondEffect {
             Tag::Coupling => Coupling::at(junction()?).map(Into::into),
             Tag::Cogging => Cogging::at(junction()?).map(Into::into),
             Tag::Brush => Brush::at(junction()?).map(Into::into),
+            Tag::Calibration => target
+                .is_empty()
+                .then_some(BondEffect::Calibration(Calibration)),
         };
         effect.ok_or_else(|| unknown(c))
     }
@@ -143,6 +160,7 @@ impl BondEffect {
             BondEffect::Cogging(k) => k,
             BondEffect::Brush(k) => k,
             BondEffect::Saturation(k) => k,
+            BondEffect::Calibration(k) => k,
         }
     }
 
@@ -160,7 +178,8 @@ impl BondEffect {
             BondEffect::Deviation(_)
             | BondEffect::Factor(_)
             | BondEffect::Fault(_)
-            | BondEffect::Saturation(_) => None,
+            | BondEffect::Saturation(_)
+            | BondEffect::Calibration(_) => None,
         }
     }
 
@@ -197,7 +216,7 @@ impl BondEffect {
         }
         let (tag, _) = Tag::read(&c.id)?;
         match tag {
-            Tag::Deviation | Tag::Fault => None,
+            Tag::Deviation | Tag::Fault | Tag::Calibration => None,
             Tag::Viscous => Viscous::vanishing_values(c),
             Tag::Coulomb => Coulomb::vanishing_values(c),
             Tag::Load => Load::vanishing_values(c),

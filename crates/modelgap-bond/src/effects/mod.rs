@@ -52,7 +52,9 @@
 //!   a modulus input), [`fault`](Fault) (`fault:<p>`, `fault:<u>`);
 //! - on junctions: [`viscous`](Viscous), [`coulomb`](Coulomb), [`load`](Load),
 //!   [`inertia`](Inertia), [`coupling`](Coupling), [`cogging`](Cogging),
-//!   [`brush`](Brush); on an I: [`saturation`](Saturation).
+//!   [`brush`](Brush); on an I: [`saturation`](Saturation);
+//! - never on the menu: [`calibration`](Calibration), the graph's own unknowns
+//!   (free parameters and initial states) that calibration fits.
 //!
 //! Around them: `def` (the trait [`EffectDef`]), `bond_effect` (the enum
 //! [`BondEffect`] over the kinds, and [`BondEffect::from_candidate`], the one
@@ -64,6 +66,7 @@
 
 mod bond_effect;
 mod brush;
+mod calibration;
 mod cogging;
 mod coulomb;
 mod coupling;
@@ -90,6 +93,7 @@ use crate::simulate::ParamChange;
 
 pub use bond_effect::BondEffect;
 pub use brush::Brush;
+pub use calibration::Calibration;
 pub use cogging::Cogging;
 pub(crate) use cogging::is_periodic;
 pub use coulomb::Coulomb;

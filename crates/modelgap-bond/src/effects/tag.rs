@@ -1,5 +1,6 @@
 //! Candidate ids: `<kind>:<parameter>` for changes of a parameter,
-//! `<kind>@<element>` for missing elements. The one place ids are written
+//! `<kind>@<element>` for missing elements, `calibration` (no target) for
+//! the graph's own unknowns. The one place ids are written
 //! ([`Tag::id`]) and read ([`Tag::read`]).
 
 /// The kind an id names, before the graph says where it acts: deviations of
@@ -16,10 +17,11 @@ pub(super) enum Tag {
     Cogging,
     Brush,
     Saturation,
+    Calibration,
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 10] = [
+const PREFIXES: [(Tag, &str); 11] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -30,6 +32,7 @@ const PREFIXES: [(Tag, &str); 10] = [
     (Tag::Cogging, "cogging@"),
     (Tag::Brush, "brush@"),
     (Tag::Saturation, "saturation@"),
+    (Tag::Calibration, "calibration"),
 ];
 
 impl Tag {
@@ -53,10 +56,14 @@ impl Tag {
             .find_map(|&(tag, prefix)| Some((tag, id.strip_prefix(prefix)?)))
     }
 
-    /// The prefixes, for a message listing what an id may start with:
+    /// The prefixes of the menu's effects, for a message listing what an id may start with:
     /// `deviation:, fault:, … or saturation@`.
     pub(super) fn expected() -> String {
-        let all: Vec<&str> = PREFIXES.iter().map(|(_, p)| *p).collect();
+        // Calibration is not a missing effect a user picks: left out.
+        let all: Vec<&str> = (PREFIXES.iter())
+            .filter(|(t, _)| *t != Tag::Calibration)
+            .map(|(_, p)| *p)
+            .collect();
         match all.split_last() {
             Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
             None => String::new(),
