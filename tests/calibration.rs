@@ -258,3 +258,50 @@ fn free_on_the_command_line_and_its_errors() {
         );
     }
 }
+
+/// A free parameter that starts wrong (R = 1.3 Ω, truth 1.0) on a recording with hidden
+/// Coulomb friction: explain calibrates R first, then fits every candidate jointly with it,
+/// so the friction is named with its true level and R comes back to its true value in the
+/// fixed model, instead of R absorbing part of the friction.
+#[test]
+fn explain_fits_candidates_jointly_with_the_free_parameters() {
+    let src = std::fs::read_to_string(root("crates/modelgap-bond/models/dc-motor.toml")).unwrap();
+    let line = r#"R = { value = 1.0, unit = "Ohm", description = "armature resistance" }"#;
+    assert!(src.contains(line));
+    let src = src.replace(
+        line,
+        r#"R = { value = 1.3, unit = "Ohm", description = "armature resistance", free = true, min = 0.1, max = 10.0 }"#,
+    );
+    let g = modelgap::bond::file::read_model(&src).unwrap();
+    let model = modelgap::bond::BondModel::new(g);
+    let rec =
+        modelgap::load_recording(&root("examples/data/motor_hidden_effect.csv"), &model).unwrap();
+    let ex = modelgap::explain(&model, &rec, &modelgap::ExplainOptions::default()).unwrap();
+    assert_eq!(ex.chosen.len(), 1, "{:?}", ex.verdict);
+    let best = &ex.chosen[0];
+    assert_eq!(best.candidate.id, "coulomb@1m");
+    assert!(
+        (best.params[0].value - 0.012).abs() < 0.0005,
+        "{:?}",
+        best.params
+    );
+    let cal = best
+        .calibration
+        .as_ref()
+        .expect("R fitted with the friction");
+    assert_eq!(cal.candidate.params[0].name, "R");
+    assert!((cal.values[0] - 1.0).abs() < 0.02, "R = {}", cal.values[0]);
+    // No "R is off" candidate: calibration fits R already.
+    assert!(ex.ranked.iter().all(|r| r.candidate.id != "deviation:R"));
+    assert!(
+        ex.warnings
+            .iter()
+            .any(|w| w.contains("calibrated the model's free parameters"))
+    );
+    // The fixed model holds both.
+    let fixed = modelgap::Model::with_effects(&model, &ex.effects()).unwrap();
+    let text = fixed.to_file_text().unwrap();
+    let back = modelgap::bond::file::read_model(&text).unwrap();
+    assert!((back.param("R").unwrap() - 1.0).abs() < 0.02);
+    assert!(text.contains("coulomb"), "{text}");
+}

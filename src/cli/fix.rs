@@ -127,7 +127,7 @@ pub fn run(args: &FixArgs) -> anyhow::Result<()> {
     else {
         return super::print(&out);
     };
-    let effects: Vec<Effect> = added.iter().map(RankedCandidate::effect).collect();
+    let effects: Vec<Effect> = modelgap::explain::effects_of(&added);
     let fixed = loaded
         .model
         .with_effects(&effects)

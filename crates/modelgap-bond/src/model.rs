@@ -447,7 +447,7 @@ impl Model for BondModel {
         let mut added = self.added.clone();
         added.extend(effects.iter().map(|e| {
             if e.candidate.kind == modelgap_core::EffectKind::Calibration {
-                format!("calibrated by fit: {e}")
+                format!("free parameters fitted: {e}")
             } else {
                 format!("added by explain: {e}")
             }

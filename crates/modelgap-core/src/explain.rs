@@ -177,6 +177,21 @@ pub struct RankedCandidate {
     /// Ids of candidates that explain the recording exactly as well with as
     /// many parameters: the same physics said another way.
     pub equivalent: Vec<String>,
+    /// The model's free parameters as re-fitted jointly with this candidate
+    /// (see [`Model::free_parameters`]); `None` when the model has none.
+    #[serde(default)]
+    pub calibration: Option<Effect>,
+}
+
+/// The effects to build into the model for `chosen` (the ranked candidates
+/// added, in order): the calibration fitted with the last of them, if the
+/// model has free parameters, then each effect.
+pub fn effects_of(chosen: &[RankedCandidate]) -> Vec<Effect> {
+    let calibration = chosen.last().and_then(|r| r.calibration.clone());
+    calibration
+        .into_iter()
+        .chain(chosen.iter().map(RankedCandidate::effect))
+        .collect()
 }
 
 impl RankedCandidate {
@@ -198,7 +213,8 @@ pub struct OutputSummary {
     pub unit: String,
     /// Noise floor (σ).
     pub noise_floor: f64,
-    /// RMS of the residual of the model as given.
+    /// RMS of the residual of the model as given (calibrated first, when it
+    /// has free parameters: see [`Model::free_parameters`]).
     pub rms_before: f64,
     /// RMS after the chosen effects (equal to before when nothing is missing).
     pub rms_after: f64,
@@ -240,9 +256,11 @@ pub struct Explanation {
 }
 
 impl Explanation {
-    /// The chosen effects, ready for [`Model::with_effects`].
+    /// The chosen effects, ready for [`Model::with_effects`] (with the
+    /// model's free parameters as fitted jointly with them first, when it
+    /// has any: see [`effects_of`]).
     pub fn effects(&self) -> Vec<Effect> {
-        self.chosen.iter().map(RankedCandidate::effect).collect()
+        effects_of(&self.chosen)
     }
 }
 
@@ -255,15 +273,70 @@ struct Target<'a> {
     sigma: Vec<f64>,
     /// How each floor was found.
     floors: Vec<Floor>,
+    /// The model's free parameters, calibrated on the recording (their
+    /// `initial` values are the calibrated ones), when it has any: every
+    /// candidate is fitted jointly with them ([`Target::joint`]).
+    calibration: Option<Candidate>,
 }
 
 impl Target<'_> {
+    /// `c` with the calibration's parameters appended: fitted together, so a
+    /// missing effect is not absorbed by a free parameter (nor the reverse).
+    fn joint(&self, c: &Candidate) -> Candidate {
+        let mut c = c.clone();
+        if let Some(cal) = &self.calibration {
+            c.params.extend(cal.params.iter().cloned());
+        }
+        c
+    }
+
+    /// How many of `c`'s parameters are the calibration's (0 or all of them).
+    fn n_calibration(&self, c: &Candidate) -> usize {
+        match &self.calibration {
+            Some(cal) if c.id != cal.id && c.params.len() > cal.params.len() => {
+                let tail = &c.params[c.params.len() - cal.params.len()..];
+                let same = tail.iter().zip(&cal.params).all(|(a, b)| a.name == b.name);
+                if same { cal.params.len() } else { 0 }
+            }
+            _ => 0,
+        }
+    }
+
+    /// The effects as the model takes them: each joint candidate split into
+    /// the candidate and the calibration; the calibration at its calibrated
+    /// values first, so that with no effect the model is the calibrated one.
+    fn split(&self, effects: &[(&Candidate, &[f64])]) -> Vec<(Candidate, Vec<f64>)> {
+        let mut out = Vec::new();
+        if let Some(cal) = &self.calibration {
+            out.push((cal.clone(), cal.initial()));
+        }
+        for &(c, v) in effects {
+            let own = c.params.len() - self.n_calibration(c);
+            let mut plain = c.clone();
+            plain.params.truncate(own);
+            out.push((plain, v[..own].to_vec()));
+            if let Some(cal) = self.calibration.as_ref().filter(|_| own < c.params.len()) {
+                out.push((cal.clone(), v[own..].to_vec()));
+            }
+        }
+        out
+    }
+
     fn n_residuals(&self) -> usize {
         self.names.len() * self.rec.len()
     }
 
     /// Weighted residuals of the model with `effects` into `out`.
     fn residuals(&self, effects: &[(&Candidate, &[f64])], out: &mut [f64]) -> Result<()> {
+        let split = self.calibration.as_ref().map(|_| self.split(effects));
+        let joint: Vec<(&Candidate, &[f64])>;
+        let effects = match &split {
+            Some(split) => {
+                joint = split.iter().map(|(c, v)| (c, v.as_slice())).collect();
+                &joint[..]
+            }
+            None => effects,
+        };
         self.model.predict_with(self.rec, effects)?.residuals_into(
             &self.names,
             &self.measured,
@@ -672,8 +745,18 @@ struct Whitening {
 
 fn ranked(target: &Target, f: &Fitted, white: &Whitening, n_eff: f64, n: usize) -> RankedCandidate {
     let scale_se = (n as f64 / n_eff.max(1.0)).sqrt();
-    let params = f
-        .candidate
+    // A joint candidate: its own parameters, then the calibration's.
+    let own = f.candidate.params.len() - target.n_calibration(&f.candidate);
+    let mut candidate = f.candidate.clone();
+    candidate.params.truncate(own);
+    let calibration = (own < f.candidate.params.len())
+        .then(|| target.calibration.clone())
+        .flatten()
+        .map(|cal| Effect {
+            candidate: cal,
+            values: f.values[own..].to_vec(),
+        });
+    let params = candidate
         .params
         .iter()
         .zip(&f.values)
@@ -688,7 +771,7 @@ fn ranked(target: &Target, f: &Fitted, white: &Whitening, n_eff: f64, n: usize) 
         })
         .collect();
     RankedCandidate {
-        candidate: f.candidate.clone(),
+        candidate,
         params,
         rms_after: if f.weighted.is_empty() {
             vec![f64::NAN; 0]
@@ -702,7 +785,7 @@ fn ranked(target: &Target, f: &Fitted, white: &Whitening, n_eff: f64, n: usize) 
             score(
                 white.cost_before,
                 target.whitened_cost(&f.weighted, &white.rhos),
-                f.candidate.params.len(),
+                own,
                 target.n_whitened(),
             )
         },
@@ -713,6 +796,7 @@ fn ranked(target: &Target, f: &Fitted, white: &Whitening, n_eff: f64, n: usize) 
         qualitative: None,
         error: f.error.clone(),
         equivalent: Vec::new(),
+        calibration,
     }
 }
 
@@ -786,14 +870,43 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         .zip(&measured)
         .map(|(n, m)| noise_floor(n, m, &opts.noise))
         .collect();
-    let target = Target {
+    let mut target = Target {
         model,
         rec,
         names: names.clone(),
         measured,
         sigma: floors.iter().map(|f| f.sigma).collect(),
         floors,
+        calibration: None,
     };
+    // The model's free parameters: calibrated first, then fitted again with
+    // every candidate (the verdict is about the calibrated model).
+    if let Some(cal) = model.free_parameters() {
+        let f = fit_candidate(&target, &[], &cal, opts);
+        match &f.error {
+            Some(e) => warnings.push(format!(
+                "the free parameters could not be calibrated ({e}): candidates are fitted \
+                 with them held at the model's values"
+            )),
+            None => {
+                let mut fitted = cal.clone();
+                for (p, v) in fitted.params.iter_mut().zip(&f.values) {
+                    p.initial = *v;
+                    p.grid = 0;
+                }
+                let values: Vec<String> = (fitted.params.iter())
+                    .map(|p| format!("{} = {:.4e}", p.name, p.initial))
+                    .collect();
+                warnings.push(format!(
+                    "calibrated the model's free parameters first ({}); every candidate is \
+                     fitted jointly with them",
+                    values.join(", ")
+                ));
+                target.calibration = Some(fitted);
+            }
+        }
+    }
+    let target = target;
     let n = target.n_residuals();
     let mut base_weighted = vec![0.0; n];
     target.residuals(&[], &mut base_weighted)?;
@@ -803,10 +916,19 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
     let judged_before = judge.judge(&base_weighted);
 
     // Fit every candidate, in parallel.
+    let free: Vec<&str> = (target.calibration.iter())
+        .flat_map(|cal| cal.params.iter().map(|p| p.name.as_str()))
+        .collect();
     let candidates: Vec<Candidate> = model
         .candidates()
         .into_iter()
         .filter(|c| opts.only.is_empty() || opts.only.iter().any(|o| o == &c.id))
+        // A free parameter "being off" is what calibration already fits.
+        .filter(|c| {
+            !(c.kind == crate::effect::EffectKind::ParameterDeviation
+                && free.contains(&c.acts_on.as_str()))
+        })
+        .map(|c| target.joint(&c))
         .collect();
     let total = candidates.len();
     let done = AtomicUsize::new(0);
@@ -1104,7 +1226,7 @@ fn second_effect(
         .min_by(|a, b| a.0.cost.total_cmp(&b.0.cost))?;
     let n_eff2 = target.n_eff(&joint_first.weighted);
     let rhos2 = target.rhos(&joint_first.weighted);
-    let k2 = second.candidate.params.len();
+    let k2 = second.candidate.params.len() - target.n_calibration(&second.candidate);
     let single = fitted
         .iter()
         .find(|f| f.candidate.id == best.candidate.id)

@@ -92,6 +92,11 @@ pub fn candidate_json(ex: &Explanation, r: &RankedCandidate) -> Value {
         "equivalent": r.equivalent,
         "termination": format!("{:?}", r.termination).to_lowercase(),
         "error": r.error,
+        "calibration": r.calibration.as_ref().map(|c| {
+            (c.candidate.params.iter().zip(&c.values))
+                .map(|(p, v)| json!({"name": p.name, "unit": p.unit, "value": finite(*v)}))
+                .collect::<Vec<_>>()
+        }),
     })
 }
 

@@ -9,7 +9,7 @@ use super::scales::Scales;
 use super::tag::Tag;
 use super::{
     Brush, Calibration, Cogging, Coulomb, Coupling, Deviation, Factor, Fault, Faulted, Inertia,
-    Junction, Load, Saturation, Viscous,
+    Junction, Load, Saturation, Stiffness, Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::BondGraph;
@@ -40,6 +40,8 @@ pub enum BondEffect {
     Brush(Brush),
     /// `saturation@<I>`: magnetic saturation.
     Saturation(Saturation),
+    /// `stiffness@<C>`: a cubic term in a C's law.
+    Stiffness(Stiffness),
     /// `calibration`: the graph's free parameters and initial states (never
     /// on the menu; see [`Calibration`]).
     Calibration(Calibration),
@@ -66,6 +68,7 @@ from_kind!(
     Cogging,
     Brush,
     Saturation,
+    Stiffness,
     Calibration
 );
 
@@ -132,6 +135,17 @@ impl BondEffect {
                     s.ok_or_else(|| bad(c, "", format!("the model has no I element '{target}'")))?;
                 Some(BondEffect::Saturation(s))
             }
+            Tag::Stiffness => {
+                let s = g.find(target).and_then(|id| Stiffness::at(g, id));
+                let s = s.ok_or_else(|| {
+                    bad(
+                        c,
+                        "",
+                        format!("the model has no C element '{target}' with an effort law"),
+                    )
+                })?;
+                Some(BondEffect::Stiffness(s))
+            }
             Tag::Viscous => Viscous::at(junction()?).map(Into::into),
             Tag::Coulomb => Coulomb::at(junction()?).map(Into::into),
             Tag::Load => Load::at(junction()?).map(Into::into),
@@ -160,6 +174,7 @@ impl BondEffect {
             BondEffect::Cogging(k) => k,
             BondEffect::Brush(k) => k,
             BondEffect::Saturation(k) => k,
+            BondEffect::Stiffness(k) => k,
             BondEffect::Calibration(k) => k,
         }
     }
@@ -179,6 +194,7 @@ impl BondEffect {
             | BondEffect::Factor(_)
             | BondEffect::Fault(_)
             | BondEffect::Saturation(_)
+            | BondEffect::Stiffness(_)
             | BondEffect::Calibration(_) => None,
         }
     }
@@ -225,6 +241,7 @@ impl BondEffect {
             Tag::Cogging => Cogging::vanishing_values(c),
             Tag::Brush => Brush::vanishing_values(c),
             Tag::Saturation => Saturation::vanishing_values(c),
+            Tag::Stiffness => Stiffness::vanishing_values(c),
         }
     }
 }

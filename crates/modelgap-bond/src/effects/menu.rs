@@ -7,7 +7,8 @@ use super::bond_effect::BondEffect;
 use super::def::EffectDef;
 use super::scales::Scales;
 use super::{
-    Brush, Cogging, Coulomb, Coupling, Deviation, Factor, Fault, Inertia, Load, Saturation, Viscous,
+    Brush, Cogging, Coulomb, Coupling, Deviation, Factor, Fault, Inertia, Load, Saturation,
+    Stiffness, Viscous,
 };
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
@@ -39,6 +40,9 @@ use crate::graph::{BondGraph, ElementId};
 ///   starts). Translational junctions use `F_c`, `F_0`, `dm`, `m2`.
 /// - On each electrical 1-junction: `brush@<j>` (`v_b` ≥ 0, smoothed with
 ///   the fixed [`CONTACT_SMOOTHING_A`](super::CONTACT_SMOOTHING_A)).
+/// - For each C with an effort law, in any domain: `stiffness@<C>`, a cubic
+///   term `k3 q³` (`k3` either sign; scale: a tenth of the junction's peak
+///   effort at the C's peak displacement of a start-up).
 /// - For each electrical I with a linear law: `saturation@<I>`
 ///   (`f = p / L · (1 + a_sat p²)`, `a_sat` ≥ 0 in 1/Wb², scale `0.1 / p_peak²`
 ///   with `p_peak` the peak flux of a start-up).
@@ -88,6 +92,7 @@ pub fn offered(g: &BondGraph) -> Vec<BondEffect> {
     on_junctions.sort_by_key(|e| e.junction().map(|j| j.id));
     out.extend(on_junctions);
     out.extend(of::<Saturation>(g));
+    out.extend(of::<Stiffness>(g));
     out
 }
 

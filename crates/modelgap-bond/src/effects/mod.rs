@@ -52,7 +52,8 @@
 //!   a modulus input), [`fault`](Fault) (`fault:<p>`, `fault:<u>`);
 //! - on junctions: [`viscous`](Viscous), [`coulomb`](Coulomb), [`load`](Load),
 //!   [`inertia`](Inertia), [`coupling`](Coupling), [`cogging`](Cogging),
-//!   [`brush`](Brush); on an I: [`saturation`](Saturation);
+//!   [`brush`](Brush); on an I: [`saturation`](Saturation); on a C, in any
+//!   domain: [`stiffness`](Stiffness) (a cubic term);
 //! - never on the menu: [`calibration`](Calibration), the graph's own unknowns
 //!   (free parameters and initial states) that calibration fits.
 //!
@@ -82,6 +83,7 @@ mod load;
 mod menu;
 mod saturation;
 mod scales;
+mod stiffness;
 mod tag;
 mod viscous;
 
@@ -109,6 +111,7 @@ pub use load::Load;
 pub use menu::{candidates, offered};
 pub use saturation::Saturation;
 pub use scales::Scales;
+pub use stiffness::Stiffness;
 pub use viscous::Viscous;
 
 /// The name of the fault-time parameter of every abrupt-change candidate.

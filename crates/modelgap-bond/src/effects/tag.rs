@@ -17,11 +17,12 @@ pub(super) enum Tag {
     Cogging,
     Brush,
     Saturation,
+    Stiffness,
     Calibration,
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 11] = [
+const PREFIXES: [(Tag, &str); 12] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -32,6 +33,7 @@ const PREFIXES: [(Tag, &str); 11] = [
     (Tag::Cogging, "cogging@"),
     (Tag::Brush, "brush@"),
     (Tag::Saturation, "saturation@"),
+    (Tag::Stiffness, "stiffness@"),
     (Tag::Calibration, "calibration"),
 ];
 
@@ -91,7 +93,7 @@ mod tests {
     fn the_expected_prefixes_read_as_a_list() {
         assert_eq!(
             Tag::expected(),
-            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@ or saturation@"
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@ or stiffness@"
         );
     }
 }
