@@ -148,6 +148,58 @@ pub enum Law {
     },
 }
 
+/// The physical domain a junction declares (`domain = "hydraulic"` in a
+/// model file): it names the physics the candidate menu attaches there when
+/// the units do not say.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PhysicalDomain {
+    /// Voltages and currents.
+    Electrical,
+    /// Torques and angular speeds.
+    Rotational,
+    /// Forces and velocities.
+    Translational,
+    /// Pressures (or levels) and volume flows.
+    Hydraulic,
+    /// Gas pressures and mass flows.
+    Pneumatic,
+    /// Temperatures and heat flows.
+    Thermal,
+    /// Magnetomotive forces and flux rates.
+    Magnetic,
+}
+
+impl PhysicalDomain {
+    /// Every domain, in the order model files document them.
+    pub const ALL: [PhysicalDomain; 7] = [
+        PhysicalDomain::Electrical,
+        PhysicalDomain::Rotational,
+        PhysicalDomain::Translational,
+        PhysicalDomain::Hydraulic,
+        PhysicalDomain::Pneumatic,
+        PhysicalDomain::Thermal,
+        PhysicalDomain::Magnetic,
+    ];
+
+    /// The name written in model files (`hydraulic`).
+    pub fn name(self) -> &'static str {
+        match self {
+            PhysicalDomain::Electrical => "electrical",
+            PhysicalDomain::Rotational => "rotational",
+            PhysicalDomain::Translational => "translational",
+            PhysicalDomain::Hydraulic => "hydraulic",
+            PhysicalDomain::Pneumatic => "pneumatic",
+            PhysicalDomain::Thermal => "thermal",
+            PhysicalDomain::Magnetic => "magnetic",
+        }
+    }
+
+    /// The domain a model file names.
+    pub fn from_name(name: &str) -> Option<PhysicalDomain> {
+        PhysicalDomain::ALL.into_iter().find(|d| d.name() == name)
+    }
+}
+
 /// One element of a bond graph.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Element {
@@ -159,6 +211,8 @@ pub struct Element {
     pub law: Law,
     /// A human description ("armature resistance").
     pub description: String,
+    /// The physical domain a junction declares, if it does.
+    pub domain: Option<PhysicalDomain>,
 }
 
 impl Element {
@@ -178,6 +232,7 @@ impl Element {
             kind,
             law,
             description: String::new(),
+            domain: None,
         }
     }
 

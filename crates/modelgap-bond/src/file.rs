@@ -19,6 +19,7 @@
 //! [[elements]]
 //! name = "1"
 //! kind = "1"
+//! domain = "electrical"   # optional, junctions only: what the menu attaches here
 //!
 //! [[elements]]
 //! name = "R"
@@ -68,7 +69,9 @@ use std::path::Path;
 use serde::Deserialize;
 use toml::Spanned;
 
-use crate::element::{Element, ElementKind, InitialState, Law, Measured, Output, Range};
+use crate::element::{
+    Element, ElementKind, InitialState, Law, Measured, Output, PhysicalDomain, Range,
+};
 use crate::error::{BondError, Result};
 use crate::expr::{Expr, parse};
 use crate::graph::BondGraph;
@@ -169,6 +172,7 @@ struct ElementEntry {
     flow: Option<Spanned<String>>,
     #[serde(default)]
     description: String,
+    domain: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize)]
@@ -364,13 +368,32 @@ pub fn read_model(src: &str) -> Result<BondGraph> {
             }
             Law::Nonlinear { effort, flow }
         };
-        let mut element = Element {
+        let domain = match &e.domain {
+            None => None,
+            Some(d) if !kind.is_junction() => {
+                return Err(ctx.err(
+                    d.span(),
+                    format!("element '{name}': only a junction (0 or 1) declares a `domain`"),
+                ));
+            }
+            Some(d) => Some(PhysicalDomain::from_name(d.get_ref()).ok_or_else(|| {
+                ctx.err(
+                    d.span(),
+                    format!(
+                        "element '{name}': unknown domain '{}' (expected one of {})",
+                        d.get_ref(),
+                        PhysicalDomain::ALL.map(PhysicalDomain::name).join(", ")
+                    ),
+                )
+            })?),
+        };
+        let element = Element {
             name: name.clone(),
             kind,
             law,
-            description: String::new(),
+            description: e.description.clone(),
+            domain,
         };
-        element.description = e.description.clone();
         g.add(element)
             .map_err(|err| ctx.err(e.name.span(), err.to_string()))?;
         element_spans.push(e.name.span());
@@ -610,6 +633,9 @@ pub fn write_model(g: &BondGraph) -> String {
         }
         if !el.description.is_empty() {
             let _ = writeln!(s, "description = {}", q(&el.description));
+        }
+        if let Some(d) = el.domain {
+            let _ = writeln!(s, "domain = {}", q(d.name()));
         }
     }
     if !g.bonds().is_empty() {

@@ -432,6 +432,55 @@ impl Model for BondModel {
         effects::candidates(&self.graph)
     }
 
+    /// The menu with its scales from a run driven by the recording's inputs
+    /// ([`effects::Scales::of_run`]); the defaults' scales when the model
+    /// cannot simulate the recording.
+    fn candidates_for(&self, rec: &Recording) -> Vec<Candidate> {
+        match self.run(rec, &[]) {
+            Ok(run) => {
+                effects::candidates_with(&self.graph, &effects::Scales::of_run(&self.graph, &run))
+            }
+            Err(_) => self.candidates(),
+        }
+    }
+
+    /// The outputs the recording does not measure, and the junctions whose
+    /// physics the menu cannot name: a storage node (0-junction with a C)
+    /// or a 1-junction with an I that has neither a unit to read nor a
+    /// declared `domain` gets only the generic candidates.
+    fn notes(&self, rec: &Recording) -> Vec<String> {
+        let mut out: Vec<String> = (self.graph.outputs().iter())
+            .filter(|o| rec.signal(&o.name).is_none())
+            .map(|o| {
+                format!(
+                    "the recording does not measure output `{}`: it is left out",
+                    o.name
+                )
+            })
+            .collect();
+        let g = &self.graph;
+        for id in g.element_ids() {
+            let el = g.element(id);
+            let generic_node = effects::Node::of(g, id)
+                .is_some_and(|n| n.kind == effects::NodeKind::Generic && el.domain.is_none());
+            let has_inertia = el.kind == ElementKind::One
+                && (g.ports(id).iter())
+                    .any(|(b, _)| g.element(g.other_end(*b, id)).kind == ElementKind::I);
+            let unknown_junction =
+                has_inertia && el.domain.is_none() && effects::Junction::of(g, id).is_none();
+            if generic_node || unknown_junction {
+                out.push(format!(
+                    "junction `{}` has no unit to read and declares no domain: the menu tries only \
+                     generic effects there; give its storage parameter a unit or write \
+                     `domain = \"hydraulic\"` (electrical, rotational, translational, pneumatic, \
+                     thermal, magnetic) on it for that domain's physics",
+                    el.name
+                ));
+            }
+        }
+        out
+    }
+
     /// The parameters and initial states marked free in the graph (see
     /// [`effects::Calibration`]).
     fn free_parameters(&self) -> Option<Candidate> {

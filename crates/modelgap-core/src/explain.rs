@@ -920,7 +920,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         .flat_map(|cal| cal.params.iter().map(|p| p.name.as_str()))
         .collect();
     let candidates: Vec<Candidate> = model
-        .candidates()
+        .candidates_for(rec)
         .into_iter()
         .filter(|c| opts.only.is_empty() || opts.only.iter().any(|o| o == &c.id))
         // A free parameter "being off" is what calibration already fits.

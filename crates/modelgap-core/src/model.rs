@@ -107,6 +107,15 @@ pub trait Model: Send + Sync {
     /// units, initial values and bounds.
     fn candidates(&self) -> Vec<Candidate>;
 
+    /// The candidates to fit to `rec`: [`Model::candidates`] with their
+    /// scales and bounds taken from the model driven by the recording's
+    /// inputs, not from the inputs' defaults (which the recording
+    /// overrides). The default is [`Model::candidates`]; ids are the same.
+    fn candidates_for(&self, rec: &Recording) -> Vec<Candidate> {
+        let _ = rec;
+        self.candidates()
+    }
+
     /// The model's own unknowns — parameters marked free and initial states
     /// to be fitted — as one candidate of kind
     /// [`EffectKind::Calibration`](crate::EffectKind::Calibration) that

@@ -9,7 +9,7 @@ use super::scales::Scales;
 use super::tag::Tag;
 use super::{
     Brush, Calibration, Cogging, Coulomb, Coupling, Deviation, Factor, Fault, Faulted, Inertia,
-    Junction, Load, Saturation, Stiffness, Viscous,
+    Inflow, Junction, Leak, Load, Node, Overflow, Saturation, Stiffness, Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::BondGraph;
@@ -42,6 +42,12 @@ pub enum BondEffect {
     Saturation(Saturation),
     /// `stiffness@<C>`: a cubic term in a C's law.
     Stiffness(Stiffness),
+    /// `leak@<node>`: a linear loss from a storage node.
+    Leak(Leak),
+    /// `inflow@<node>`: a constant flow into a storage node.
+    Inflow(Inflow),
+    /// `overflow@<node>`: outflow above a threshold.
+    Overflow(Overflow),
     /// `calibration`: the graph's free parameters and initial states (never
     /// on the menu; see [`Calibration`]).
     Calibration(Calibration),
@@ -69,6 +75,9 @@ from_kind!(
     Brush,
     Saturation,
     Stiffness,
+    Leak,
+    Inflow,
+    Overflow,
     Calibration
 );
 
@@ -123,6 +132,17 @@ impl BondEffect {
                 )
             })
         };
+        let node = || -> Result<Node> {
+            g.find(target)
+                .and_then(|id| Node::of(g, id))
+                .ok_or_else(|| {
+                    bad(
+                        c,
+                        "",
+                        format!("'{target}' is not a 0-junction with a C (a storage node)"),
+                    )
+                })
+        };
         let effect = match tag {
             Tag::Deviation => match steady()? {
                 Faulted::Parameter(d) => Some(BondEffect::Deviation(d)),
@@ -146,6 +166,9 @@ impl BondEffect {
                 })?;
                 Some(BondEffect::Stiffness(s))
             }
+            Tag::Leak => Some(BondEffect::Leak(Leak { node: node()? })),
+            Tag::Inflow => Some(BondEffect::Inflow(Inflow { node: node()? })),
+            Tag::Overflow => Some(BondEffect::Overflow(Overflow { node: node()? })),
             Tag::Viscous => Viscous::at(junction()?).map(Into::into),
             Tag::Coulomb => Coulomb::at(junction()?).map(Into::into),
             Tag::Load => Load::at(junction()?).map(Into::into),
@@ -175,6 +198,9 @@ impl BondEffect {
             BondEffect::Brush(k) => k,
             BondEffect::Saturation(k) => k,
             BondEffect::Stiffness(k) => k,
+            BondEffect::Leak(k) => k,
+            BondEffect::Inflow(k) => k,
+            BondEffect::Overflow(k) => k,
             BondEffect::Calibration(k) => k,
         }
     }
@@ -195,6 +221,9 @@ impl BondEffect {
             | BondEffect::Fault(_)
             | BondEffect::Saturation(_)
             | BondEffect::Stiffness(_)
+            | BondEffect::Leak(_)
+            | BondEffect::Inflow(_)
+            | BondEffect::Overflow(_)
             | BondEffect::Calibration(_) => None,
         }
     }
@@ -242,6 +271,9 @@ impl BondEffect {
             Tag::Brush => Brush::vanishing_values(c),
             Tag::Saturation => Saturation::vanishing_values(c),
             Tag::Stiffness => Stiffness::vanishing_values(c),
+            Tag::Leak => Leak::vanishing_values(c),
+            Tag::Inflow => Inflow::vanishing_values(c),
+            Tag::Overflow => Overflow::vanishing_values(c),
         }
     }
 }

@@ -14,12 +14,23 @@ use crate::graph::{BondGraph, Direction, ElementId};
 use crate::qual::Qual;
 
 /// The domain of a 1-junction and the I element that sets it, or `None`
-/// when no I bonded to it has a parameter with a domain unit (see the
+/// when no I bonded to it has a parameter with a domain unit and the
+/// junction declares no electrical or mechanical domain (see the
 /// [module docs](super)).
 pub fn junction_domain(g: &BondGraph, junction: ElementId) -> Option<(Domain, ElementId)> {
     if g.element(junction).kind != ElementKind::One {
         return None;
     }
+    // A declared domain names the physics when the units do not.
+    let declared = g.element(junction).domain.and_then(|d| {
+        use crate::element::PhysicalDomain as D;
+        match d {
+            D::Electrical => Some(Domain::Electrical),
+            D::Rotational => Some(Domain::Rotational),
+            D::Translational => Some(Domain::Translational),
+            _ => None,
+        }
+    });
     for (bond, _) in g.ports(junction) {
         let other = g.other_end(bond, junction);
         let el = g.element(other);
@@ -31,6 +42,9 @@ pub fn junction_domain(g: &BondGraph, junction: ElementId) -> Option<(Domain, El
             Law::Nonlinear { effort, flow } => flow.iter().chain(effort.iter()).collect(),
             _ => Vec::new(),
         };
+        if let Some(d) = declared {
+            return Some((d, other));
+        }
         for e in exprs {
             for name in e.params() {
                 if let Some(d) = g.params().get(&name).and_then(|p| Domain::of_unit(&p.unit)) {

@@ -7,8 +7,8 @@ use super::bond_effect::BondEffect;
 use super::def::EffectDef;
 use super::scales::Scales;
 use super::{
-    Brush, Cogging, Coulomb, Coupling, Deviation, Factor, Fault, Inertia, Load, Saturation,
-    Stiffness, Viscous,
+    Brush, Cogging, Coulomb, Coupling, Deviation, Factor, Fault, Inertia, Inflow, Leak, Load,
+    Overflow, Saturation, Stiffness, Viscous,
 };
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
@@ -43,6 +43,10 @@ use crate::graph::{BondGraph, ElementId};
 /// - For each C with an effort law, in any domain: `stiffness@<C>`, a cubic
 ///   term `k3 q³` (`k3` either sign; scale: a tenth of the junction's peak
 ///   effort at the C's peak displacement of a start-up).
+/// - On each storage node (a 0-junction with a C, any domain; the words
+///   follow the C's unit: hydraulic, thermal, electrical or generic):
+///   `leak@<n>` (`f = G e`, `G` ≥ 0), `inflow@<n>` (a constant `Q`, either
+///   sign) and `overflow@<n>` (`f = k_o max(e − e_max, 0)`, `e_max` on a grid).
 /// - For each electrical I with a linear law: `saturation@<I>`
 ///   (`f = p / L · (1 + a_sat p²)`, `a_sat` ≥ 0 in 1/Wb², scale `0.1 / p_peak²`
 ///   with `p_peak` the peak flux of a start-up).
@@ -66,8 +70,13 @@ use crate::graph::{BondGraph, ElementId};
 /// assert!(menu.iter().any(|c| c.id == "deviation:R"));
 /// ```
 pub fn candidates(g: &BondGraph) -> Vec<Candidate> {
-    let scales = Scales::of(g);
-    offered(g).iter().map(|e| e.candidate(g, &scales)).collect()
+    candidates_with(g, &Scales::of(g))
+}
+
+/// The candidates of `g` with these scales (from a recording's run: see
+/// [`Scales::of_run`]).
+pub fn candidates_with(g: &BondGraph, scales: &Scales) -> Vec<Candidate> {
+    offered(g).iter().map(|e| e.candidate(g, scales)).collect()
 }
 
 /// Every effect offered on `g`, in the order of [`candidates`]: each kind's
@@ -93,6 +102,18 @@ pub fn offered(g: &BondGraph) -> Vec<BondEffect> {
     out.extend(on_junctions);
     out.extend(of::<Saturation>(g));
     out.extend(of::<Stiffness>(g));
+    // Storage nodes, node by node.
+    let mut on_nodes: Vec<(ElementId, BondEffect)> = (Leak::offers(g).into_iter())
+        .map(|k| (k.node.id, k.into()))
+        .chain(Inflow::offers(g).into_iter().map(|k| (k.node.id, k.into())))
+        .chain(
+            Overflow::offers(g)
+                .into_iter()
+                .map(|k| (k.node.id, k.into())),
+        )
+        .collect();
+    on_nodes.sort_by_key(|(id, _)| *id);
+    out.extend(on_nodes.into_iter().map(|(_, e)| e));
     out
 }
 

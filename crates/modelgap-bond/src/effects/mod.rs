@@ -53,7 +53,9 @@
 //! - on junctions: [`viscous`](Viscous), [`coulomb`](Coulomb), [`load`](Load),
 //!   [`inertia`](Inertia), [`coupling`](Coupling), [`cogging`](Cogging),
 //!   [`brush`](Brush); on an I: [`saturation`](Saturation); on a C, in any
-//!   domain: [`stiffness`](Stiffness) (a cubic term);
+//!   domain: [`stiffness`](Stiffness) (a cubic term); on storage nodes
+//!   ([`Node`]: a 0-junction with a C, any domain): [`leak`](Leak),
+//!   [`inflow`](Inflow), [`overflow`](Overflow);
 //! - never on the menu: [`calibration`](Calibration), the graph's own unknowns
 //!   (free parameters and initial states) that calibration fits.
 //!
@@ -78,9 +80,13 @@ mod edit;
 mod factor;
 mod fault;
 mod inertia;
+mod inflow;
 mod junction;
+mod leak;
 mod load;
 mod menu;
+mod node;
+mod overflow;
 mod saturation;
 mod scales;
 mod stiffness;
@@ -106,9 +112,13 @@ pub use domain::Domain;
 pub use factor::Factor;
 pub use fault::{Fault, Faulted};
 pub use inertia::Inertia;
+pub use inflow::Inflow;
 pub use junction::{Junction, junction_domain};
+pub use leak::Leak;
 pub use load::Load;
-pub use menu::{candidates, offered};
+pub use menu::{candidates, candidates_with, offered};
+pub use node::{Node, NodeKind};
+pub use overflow::Overflow;
 pub use saturation::Saturation;
 pub use scales::Scales;
 pub use stiffness::Stiffness;

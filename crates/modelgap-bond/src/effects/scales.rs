@@ -7,7 +7,7 @@ use crate::compiled::CompiledModel;
 use crate::element::ElementKind;
 use crate::expr::Var;
 use crate::graph::{BondGraph, ElementId};
-use crate::simulate::{Inputs, SimOptions, simulate_compiled, time_grid};
+use crate::simulate::{Inputs, Run, SimOptions, simulate_compiled, time_grid};
 use crate::state_space::StateSpace;
 
 /// Typical and peak magnitude of a quantity over a start-up.
@@ -116,40 +116,106 @@ impl Scales {
             }
         }
         if let Some(run) = &run {
-            let n = model.n_states();
-            let mut x = vec![0.0; n];
-            for (k, &tk) in run.t.iter().enumerate() {
-                for (xi, col) in x.iter_mut().zip(&run.states) {
-                    *xi = col[k];
-                }
-                let vars = model.variable_values(tk, &x, &u);
-                for &j in &junctions {
-                    let e = s.effort.entry(j).or_default();
-                    e.peak = e.peak.max(level(&vars, j, false));
-                    let f = s.flow.entry(j).or_default();
-                    f.peak = f.peak.max(level(&vars, j, true));
-                }
-            }
-            for id in g.element_ids() {
-                let kind = g.element(id).kind;
-                if !kind.is_storage() {
-                    continue;
-                }
-                let Some(&(bond, _)) = g.ports(id).first() else {
-                    continue;
-                };
-                let name = match kind {
-                    ElementKind::I => Var::P(bond.number()),
-                    _ => Var::Q(bond.number()),
-                }
-                .to_string();
-                if let Some(v) = run.state(&name) {
-                    let peak = v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-                    s.state_peak.insert(id, peak);
-                }
-            }
+            s.measure(g, &model, run, false);
         }
         s
+    }
+
+    /// The scales of `g` over `run`, a simulation driven by a recording's
+    /// inputs (see [`crate::BondModel`]'s candidates for a recording): each
+    /// junction's typical effort and flow is its RMS over the run and its
+    /// peak the largest magnitude; the slowest mode as in [`Scales::of`]. A
+    /// recording overrides the inputs' defaults, so the scales must not
+    /// come from them.
+    pub fn of_run(g: &BondGraph, run: &Run) -> Scales {
+        let mut s = Scales::default();
+        let Ok(model) = CompiledModel::new(g) else {
+            return s;
+        };
+        let u = model.input_defaults.clone();
+        let ss = StateSpace::of_compiled(&model, None, Some(&u));
+        s.slowest_rate = (ss.modes().into_iter())
+            .find(|m| m.time_constant.is_finite() && m.time_constant > 0.0)
+            .map(|m| m.eigenvalue.norm())
+            .filter(|r| *r > 0.0);
+        s.measure(g, &model, run, true);
+        s
+    }
+
+    /// Peaks of every junction's effort and flow over `run` (and, with
+    /// `typical`, their RMS as the typical level), and each storage
+    /// element's peak state.
+    fn measure(&mut self, g: &BondGraph, model: &CompiledModel, run: &Run, typical: bool) {
+        let junctions: Vec<ElementId> = g
+            .element_ids()
+            .filter(|&id| g.element(id).kind.is_junction())
+            .collect();
+        let level = |vars: &BTreeMap<Var, f64>, j: ElementId, flow: bool| -> f64 {
+            (g.ports(j).iter())
+                .map(|(b, _)| {
+                    let v = if flow {
+                        Var::F(b.number())
+                    } else {
+                        Var::E(b.number())
+                    };
+                    vars.get(&v).copied().unwrap_or(0.0).abs()
+                })
+                .filter(|v| v.is_finite())
+                .fold(0.0, f64::max)
+        };
+        let n = model.n_states();
+        let mut x = vec![0.0; n];
+        let mut u: Vec<f64> = model.input_defaults.clone();
+        let mut squares: BTreeMap<(ElementId, bool), f64> = BTreeMap::new();
+        for (k, &tk) in run.t.iter().enumerate() {
+            for (xi, col) in x.iter_mut().zip(&run.states) {
+                *xi = col[k];
+            }
+            for (name, col) in run.input_names.iter().zip(&run.inputs) {
+                if let Some(j) = model.input_names.iter().position(|m| m == name) {
+                    u[j] = col[k];
+                }
+            }
+            let vars = model.variable_values(tk, &x, &u);
+            for &j in &junctions {
+                let (e, f) = (level(&vars, j, false), level(&vars, j, true));
+                let le = self.effort.entry(j).or_default();
+                le.peak = le.peak.max(e);
+                let lf = self.flow.entry(j).or_default();
+                lf.peak = lf.peak.max(f);
+                *squares.entry((j, false)).or_default() += e * e;
+                *squares.entry((j, true)).or_default() += f * f;
+            }
+        }
+        if typical && !run.t.is_empty() {
+            for ((j, flow), sum) in squares {
+                let rms = (sum / run.t.len() as f64).sqrt();
+                let level = if flow {
+                    &mut self.flow
+                } else {
+                    &mut self.effort
+                };
+                level.entry(j).or_default().typical = rms;
+            }
+        }
+        for id in g.element_ids() {
+            let kind = g.element(id).kind;
+            if !kind.is_storage() {
+                continue;
+            }
+            let Some(&(bond, _)) = g.ports(id).first() else {
+                continue;
+            };
+            let name = match kind {
+                ElementKind::I => Var::P(bond.number()),
+                _ => Var::Q(bond.number()),
+            }
+            .to_string();
+            if let Some(v) = run.state(&name) {
+                let peak = v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+                self.state_peak.insert(id, peak);
+            }
+        }
     }
 
     pub(super) fn effort(&self, j: ElementId) -> Level {

@@ -48,16 +48,16 @@ impl Stiffness {
         }
     }
 
-    /// The unit of `k3`: the effort's unit per displacement cubed, when the
-    /// C's linear coefficient has a unit to read; else empty.
+    /// The unit of `k3`: one over the C's coefficient unit per displacement
+    /// squared, when its linear coefficient has a unit; else `e/q^3`.
     fn unit(self, g: &BondGraph) -> String {
         match &g.element(self.element).law {
             Law::Linear(c) => (c.params().iter())
                 .filter_map(|n| g.params().get(n))
                 .map(|p| p.unit.trim())
                 .find(|u| !u.is_empty())
-                .map_or_else(String::new, |u| format!("1/(({u}) q^2)")),
-            _ => String::new(),
+                .map_or_else(|| "e/q^3".to_string(), |u| format!("1/(({u}) q^2)")),
+            _ => "e/q^3".to_string(),
         }
     }
 }

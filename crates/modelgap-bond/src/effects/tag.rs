@@ -18,11 +18,14 @@ pub(super) enum Tag {
     Brush,
     Saturation,
     Stiffness,
+    Leak,
+    Inflow,
+    Overflow,
     Calibration,
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 12] = [
+const PREFIXES: [(Tag, &str); 15] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -34,6 +37,9 @@ const PREFIXES: [(Tag, &str); 12] = [
     (Tag::Brush, "brush@"),
     (Tag::Saturation, "saturation@"),
     (Tag::Stiffness, "stiffness@"),
+    (Tag::Leak, "leak@"),
+    (Tag::Inflow, "inflow@"),
+    (Tag::Overflow, "overflow@"),
     (Tag::Calibration, "calibration"),
 ];
 
@@ -93,7 +99,7 @@ mod tests {
     fn the_expected_prefixes_read_as_a_list() {
         assert_eq!(
             Tag::expected(),
-            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@ or stiffness@"
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, stiffness@, leak@, inflow@ or overflow@"
         );
     }
 }

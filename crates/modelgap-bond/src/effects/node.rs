@@ -1,0 +1,162 @@
+//! Where storage-node effects attach: 0-junctions with a C bonded to them —
+//! a tank's level, a thermal mass's temperature, a capacitor's voltage, a
+//! pressure node. Any domain; the words follow the C's unit when it has one.
+
+use modelgap_core::{Candidate, EffectKind, EffectParam};
+
+use super::edit::ident;
+use super::menu::place;
+use super::scales::Scales;
+use super::tag::Tag;
+use crate::element::{ElementKind, Law};
+use crate::graph::{BondGraph, ElementId};
+
+/// What a node's storage is: the junction's declared domain, else the unit
+/// of its C's parameter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NodeKind {
+    /// A tank or a pressure node (a C in m^3/Pa, m^5/N, m^2).
+    Hydraulic,
+    /// A thermal mass (a C in J/K).
+    Thermal,
+    /// A capacitor node (a C in F).
+    Electrical,
+    /// No unit to go by.
+    Generic,
+}
+
+impl NodeKind {
+    /// The kind of node a C's parameter unit says.
+    pub fn of_unit(unit: &str) -> NodeKind {
+        let compact: String = unit.chars().filter(|c| !c.is_whitespace()).collect();
+        match compact.as_str() {
+            "m^3/Pa" | "m^5/N" | "m^2" | "m3/Pa" | "m²" => NodeKind::Hydraulic,
+            "J/K" | "J/degC" => NodeKind::Thermal,
+            "F" => NodeKind::Electrical,
+            _ => NodeKind::Generic,
+        }
+    }
+}
+
+impl Node {
+    /// The units of the node's effort and flow: what its kind says, `e` and
+    /// `f` for a generic node. A hydraulic node whose C is an area (m^2)
+    /// holds a level in m; otherwise a pressure in Pa.
+    pub fn units(self) -> (&'static str, &'static str) {
+        match self.kind {
+            NodeKind::Hydraulic if self.level => ("m", "m^3/s"),
+            NodeKind::Hydraulic => ("Pa", "m^3/s"),
+            NodeKind::Thermal => ("K", "W"),
+            NodeKind::Electrical => ("V", "A"),
+            NodeKind::Generic => ("e", "f"),
+        }
+    }
+
+    /// The unit of a conductance here (flow per effort).
+    pub fn conductance_unit(self) -> String {
+        let (e, f) = self.units();
+        format!("{f}/{e}")
+    }
+}
+
+/// A 0-junction with a C: where leakage, a constant inflow and an overflow
+/// attach.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Node {
+    /// The 0-junction.
+    pub id: ElementId,
+    /// What its storage is.
+    pub kind: NodeKind,
+    /// True when its C is an area (m^2): the effort is a level.
+    pub level: bool,
+}
+
+impl Node {
+    /// The node `id`, when it is a 0-junction with a C bonded to it.
+    pub fn of(g: &BondGraph, id: ElementId) -> Option<Node> {
+        if g.element(id).kind != ElementKind::Zero {
+            return None;
+        }
+        let c = (g.ports(id).into_iter())
+            .map(|(b, _)| g.other_end(b, id))
+            .find(|&o| g.element(o).kind == ElementKind::C)?;
+        if let Some(d) = g.element(id).domain {
+            use crate::element::PhysicalDomain as D;
+            let kind = match d {
+                D::Hydraulic | D::Pneumatic => NodeKind::Hydraulic,
+                D::Thermal => NodeKind::Thermal,
+                D::Electrical => NodeKind::Electrical,
+                _ => NodeKind::Generic,
+            };
+            return Some(Node {
+                id,
+                kind,
+                level: false,
+            });
+        }
+        let unit = match &g.element(c).law {
+            Law::Linear(e) => (e.params().iter())
+                .filter_map(|n| g.params().get(n))
+                .map(|p| p.unit.clone())
+                .find(|u| !u.trim().is_empty())
+                .unwrap_or_default(),
+            _ => String::new(),
+        };
+        let compact: String = unit.chars().filter(|c| !c.is_whitespace()).collect();
+        Some(Node {
+            id,
+            kind: NodeKind::of_unit(&unit),
+            level: matches!(compact.as_str(), "m^2" | "m²"),
+        })
+    }
+
+    /// Every node of `g`, in element order.
+    pub fn all(g: &BondGraph) -> Vec<Node> {
+        g.element_ids().filter_map(|id| Node::of(g, id)).collect()
+    }
+
+    /// The node's name (`top`).
+    pub(super) fn name(self, g: &BondGraph) -> &str {
+        &g.element(self.id).name
+    }
+
+    /// The suffix of what an edit adds here.
+    pub(super) fn suffix(self, g: &BondGraph) -> String {
+        ident(self.name(g))
+    }
+
+    /// "tank 1 (top)" from the junction's description, or "junction top".
+    pub(super) fn place(self, g: &BondGraph) -> String {
+        place(g, self.id)
+    }
+
+    /// The largest effort (level, temperature, voltage) seen at the node.
+    pub(super) fn effort_peak(self, scales: &Scales) -> f64 {
+        let e = scales.effort(self.id);
+        e.peak_or(e.strength())
+    }
+
+    /// The largest flow seen into or out of the node.
+    pub(super) fn flow_peak(self, scales: &Scales) -> f64 {
+        let f = scales.flow(self.id);
+        f.peak_or(f.flow())
+    }
+
+    /// A missing-element candidate on this node.
+    pub(super) fn candidate(
+        self,
+        g: &BondGraph,
+        tag: Tag,
+        name: String,
+        params: Vec<EffectParam>,
+    ) -> Candidate {
+        let at = self.name(g);
+        Candidate {
+            id: tag.id(at),
+            name,
+            kind: EffectKind::MissingElement,
+            acts_on: at.to_string(),
+            params,
+        }
+    }
+}

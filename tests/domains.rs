@@ -1,0 +1,320 @@
+//! Every domain gets its physics: hidden effects in a hydraulic and a thermal model of our
+//! own, each generated with a law unlike the candidate's form (a square-root leak, a soft
+//! rim, convection with an exponent), with coloured noise, are named as that domain's
+//! physics at the right node — not as parameter deviations.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)] // in test helpers, a panic is a test failure
+
+use modelgap::bond::BondModel;
+use modelgap::bond::file::read_model;
+use modelgap::bond::simulate::{Drive, Hold, Inputs, SimOptions, simulate};
+use modelgap::{ExplainOptions, Recording, Signal, Verdict, explain};
+
+/// AR(1) noise (ρ = 0.8) of standard deviation `sigma`, seeded.
+fn coloured_noise(n: usize, sigma: f64, seed: u64) -> Vec<f64> {
+    let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(1);
+    let mut uniform = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    };
+    let rho: f64 = 0.8;
+    let mut x = 0.0;
+    (0..n)
+        .map(|_| {
+            let g = (-2.0 * uniform().ln()).sqrt() * (2.0 * std::f64::consts::PI * uniform()).cos();
+            x = rho * x + (1.0 - rho * rho).sqrt() * sigma * g;
+            x
+        })
+        .collect()
+}
+
+/// Simulates `truth` driven by `input` (a staircase), adds noise to each of `outputs`, and
+/// returns the recording.
+fn record(
+    truth: &str,
+    input: &str,
+    levels: &[f64],
+    step: f64,
+    outputs: &[&str],
+    sigma: f64,
+) -> Recording {
+    let g = read_model(truth).unwrap();
+    let n = 2000;
+    let dt = levels.len() as f64 * step / n as f64;
+    let t: Vec<f64> = (0..n).map(|k| k as f64 * dt).collect();
+    let u: Vec<f64> = t
+        .iter()
+        .map(|&t| levels[((t / step) as usize).min(levels.len() - 1)])
+        .collect();
+    let inputs = Inputs::new().with(
+        input,
+        Drive::Sampled {
+            t: t.clone(),
+            values: u.clone(),
+            hold: Hold::Zero,
+        },
+    );
+    let run = simulate(&g, &inputs, &t, &SimOptions::default()).unwrap();
+    let mut signals = vec![Signal::new(input, u)];
+    for (i, output) in outputs.iter().enumerate() {
+        let noise = coloured_noise(n, sigma, 11 + i as u64);
+        let y: Vec<f64> = (run.output(output).unwrap().iter().zip(&noise))
+            .map(|(a, b)| a + b)
+            .collect();
+        signals.push(Signal::new(*output, y));
+    }
+    Recording::new(t, signals).unwrap()
+}
+
+const TANKS: &str = r#"name = "two-tanks"
+[parameters]
+A1 = { value = 0.5, unit = "m^2", description = "area of tank 1" }
+A2 = { value = 0.8, unit = "m^2", description = "area of tank 2" }
+R12 = { value = 400.0, unit = "s/m^2", description = "valve between the tanks" }
+R2 = { value = 600.0, unit = "s/m^2", description = "outlet of tank 2" }
+[inputs]
+Q = { default = 0.0, unit = "m^3/s", description = "pump flow" }
+[[elements]]
+name = "pump"
+kind = "Sf"
+flow = "Q"
+[[elements]]
+name = "tank1"
+kind = "0"
+description = "tank 1"
+[[elements]]
+name = "C1"
+kind = "C"
+parameter = "A1"
+[[elements]]
+name = "valve"
+kind = "R"
+parameter = "R12"
+[[elements]]
+name = "pipe"
+kind = "1"
+[[elements]]
+name = "tank2"
+kind = "0"
+description = "tank 2"
+[[elements]]
+name = "C2"
+kind = "C"
+parameter = "A2"
+[[elements]]
+name = "outlet"
+kind = "R"
+parameter = "R2"
+[[bonds]]
+from = "pump"
+to = "tank1"
+[[bonds]]
+from = "tank1"
+to = "C1"
+[[bonds]]
+from = "tank1"
+to = "pipe"
+[[bonds]]
+from = "pipe"
+to = "valve"
+[[bonds]]
+from = "pipe"
+to = "tank2"
+[[bonds]]
+from = "tank2"
+to = "C2"
+[[bonds]]
+from = "tank2"
+to = "outlet"
+[[outputs]]
+name = "h1"
+effort = "tank1"
+unit = "m"
+
+[[outputs]]
+name = "h2"
+effort = "tank2"
+unit = "m"
+"#;
+
+/// `TANKS` with one more element on `node`: an R with a flow law, bonded from the node.
+fn with_outflow(node: &str, name: &str, flow: &str) -> String {
+    TANKS.replacen(
+        "[[outputs]]",
+        &format!(
+            "[[elements]]\nname = \"{name}\"\nkind = \"R\"\nflow = \"{flow}\"\n\n[[bonds]]\nfrom = \"{node}\"\nto = \"{name}\"\n\n[[outputs]]"
+        ),
+        1,
+    )
+}
+
+fn explained(model: &str, rec: &Recording) -> modelgap::Explanation {
+    let model = BondModel::new(read_model(model).unwrap());
+    explain(&model, rec, &ExplainOptions::default()).unwrap()
+}
+
+#[test]
+fn a_hidden_square_root_leak_is_named_leakage_from_its_tank() {
+    // A leak through a small hole: flow ∝ √level (the candidate is linear in the level).
+    let truth = with_outflow("tank1", "hole", "2e-4 * sqrt(max(e, 0))");
+    let rec = record(
+        &truth,
+        "Q",
+        &[1e-3, 3e-3, 0.5e-3, 2e-3],
+        900.0,
+        &["h1", "h2"],
+        0.002,
+    );
+    let ex = explained(TANKS, &rec);
+    assert!(
+        !matches!(ex.verdict, Verdict::NothingMissing | Verdict::Unexplained),
+        "{:?}",
+        ex.verdict
+    );
+    let best = &ex.chosen[0].candidate;
+    assert_eq!(best.id, "leak@tank1", "chose {} ({})", best.id, best.name);
+    assert!(best.name.starts_with("leakage from"), "{}", best.name);
+}
+
+#[test]
+fn a_hidden_soft_rim_is_named_overflow_of_its_tank() {
+    // Tank 2 spills over a rounded rim near 1.2 m: a softplus, not the candidate's kink.
+    let truth = with_outflow(
+        "tank2",
+        "rim",
+        "0.05 * 0.02 * ln(1 + exp((e - 1.2) / 0.02))",
+    );
+    let rec = record(
+        &truth,
+        "Q",
+        &[1e-3, 4e-3, 1e-3, 5e-3],
+        900.0,
+        &["h1", "h2"],
+        0.002,
+    );
+    let ex = explained(TANKS, &rec);
+    let best = &ex.chosen.first().expect("an effect is chosen").candidate;
+    assert_eq!(
+        best.id, "overflow@tank2",
+        "chose {} ({})",
+        best.id, best.name
+    );
+    assert!(best.name.starts_with("overflow of"), "{}", best.name);
+    let e_max = ex.chosen[0].params[0].value;
+    assert!((e_max - 1.2).abs() < 0.1, "e_max = {e_max}");
+}
+
+const ROOM: &str = r#"name = "two-masses"
+[parameters]
+C1 = { value = 2000.0, unit = "J/K", description = "heater block" }
+C2 = { value = 5000.0, unit = "J/K", description = "plate" }
+Rc = { value = 0.05, unit = "K/W", description = "contact between block and plate" }
+[inputs]
+P = { default = 0.0, unit = "W", description = "heater power" }
+[[elements]]
+name = "heater"
+kind = "Sf"
+flow = "P"
+[[elements]]
+name = "block"
+kind = "0"
+description = "the heater block"
+[[elements]]
+name = "Cb"
+kind = "C"
+parameter = "C1"
+[[elements]]
+name = "contact"
+kind = "R"
+parameter = "Rc"
+[[elements]]
+name = "joint"
+kind = "1"
+[[elements]]
+name = "plate"
+kind = "0"
+description = "the plate"
+[[elements]]
+name = "Cp"
+kind = "C"
+parameter = "C2"
+[[bonds]]
+from = "heater"
+to = "block"
+[[bonds]]
+from = "block"
+to = "Cb"
+[[bonds]]
+from = "block"
+to = "joint"
+[[bonds]]
+from = "joint"
+to = "contact"
+[[bonds]]
+from = "joint"
+to = "plate"
+[[bonds]]
+from = "plate"
+to = "Cp"
+[[outputs]]
+name = "T_plate"
+effort = "plate"
+unit = "K"
+"#;
+
+#[test]
+fn hidden_convection_is_named_heat_loss_to_ambient_from_the_plate() {
+    // Natural convection: heat flow ∝ ΔT^1.25 (the candidate is linear in ΔT).
+    let truth = ROOM.replace(
+        "[[outputs]]",
+        "[[elements]]\nname = \"air\"\nkind = \"R\"\nflow = \"0.4 * max(e, 0)^1.25\"\n\n[[bonds]]\nfrom = \"plate\"\nto = \"air\"\n\n[[outputs]]",
+    );
+    let rec = record(
+        &truth,
+        "P",
+        &[50.0, 150.0, 20.0, 100.0],
+        3000.0,
+        &["T_plate"],
+        0.05,
+    );
+    let ex = explained(ROOM, &rec);
+    let best = &ex.chosen.first().expect("an effect is chosen").candidate;
+    assert_eq!(best.id, "leak@plate", "chose {} ({})", best.id, best.name);
+    assert!(
+        best.name.starts_with("heat loss to ambient"),
+        "{}",
+        best.name
+    );
+}
+
+#[test]
+fn a_model_without_units_gets_the_generic_set_and_a_note() {
+    let bare = TANKS
+        .replace("unit = \"m^2\", ", "")
+        .replace("unit = \"s/m^2\", ", "");
+    let model = BondModel::new(read_model(&bare).unwrap());
+    let menu = modelgap::Model::candidates(&model);
+    let leak = menu.iter().find(|c| c.id == "leak@tank1").unwrap();
+    assert!(leak.name.starts_with("a linear loss from"), "{}", leak.name);
+    let rec = record(TANKS, "Q", &[1e-3, 2e-3], 900.0, &["h2"], 0.002);
+    let notes = modelgap::Model::notes(&model, &rec);
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("junction `tank1`") && n.contains("domain")),
+        "{notes:?}"
+    );
+    // Declared, the same node speaks hydraulics.
+    let declared = bare.replace(
+        "name = \"tank1\"\nkind = \"0\"",
+        "name = \"tank1\"\nkind = \"0\"\ndomain = \"hydraulic\"",
+    );
+    let model = BondModel::new(read_model(&declared).unwrap());
+    let menu = modelgap::Model::candidates(&model);
+    assert!(
+        menu.iter()
+            .any(|c| c.id == "leak@tank1" && c.name.starts_with("leakage from"))
+    );
+}
