@@ -50,7 +50,13 @@ impl EffectDef for Overflow {
             vec![
                 EffectParam::new("e_max", n.units().0, 1.2 * e, (0.2 * e, 1.2 * e), 0.1 * e)
                     .with_grid(6),
-                EffectParam::new("k_o", n.conductance_unit(), 0.0, (0.0, 100.0 * ratio), ratio),
+                EffectParam::new(
+                    "k_o",
+                    n.conductance_unit(),
+                    0.0,
+                    (0.0, 100.0 * ratio),
+                    ratio,
+                ),
             ],
         )
     }
