@@ -415,3 +415,40 @@ fn bad_free_marks_and_initial_states_name_the_line_and_what() {
         }
     }
 }
+
+#[test]
+fn declared_domains_round_trip_and_bad_ones_are_named() {
+    let g = read_model(TANKS).unwrap();
+    let top = g.find("top").unwrap();
+    assert_eq!(
+        g.element(top).domain,
+        Some(modelgap_bond::element::PhysicalDomain::Hydraulic)
+    );
+    let text = write_model(&g);
+    assert!(text.contains("domain = \"hydraulic\""), "{text}");
+    assert_eq!(read_model(&text).unwrap(), g);
+    let first = "domain = \"hydraulic\"\ndescription = \"tank 1: common level\"";
+    assert!(TANKS.contains(first));
+    let cases = [
+        (
+            first.replace("hydraulic", "hydrolic"),
+            &["element 'top'", "unknown domain 'hydrolic'", "thermal"][..],
+        ),
+        (
+            "effort = \"q\"\ndescription = \"tank 1, level x1 = q\"".to_string(),
+            &["element 'Tank1'", "only a junction"][..],
+        ),
+    ];
+    for (i, (to, expected)) in cases.into_iter().enumerate() {
+        let src = if i == 0 {
+            TANKS.replace(first, &to)
+        } else {
+            TANKS.replace(&to, &format!("{to}\ndomain = \"hydraulic\""))
+        };
+        let message = read_model(&src).expect_err(&to).to_string();
+        for e in expected {
+            assert!(message.contains(e), "expected '{e}' in: {message}");
+        }
+        assert!(message.contains("line "), "{message}");
+    }
+}
