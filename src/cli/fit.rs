@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 use anyhow::Context as _;
 use clap::Args;
+use modelgap::report::format_number as num;
 use modelgap::{CalibrationOptions, LoadOptions};
 use serde_json::json;
 
@@ -160,16 +161,18 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
     let width = cal.values.iter().map(|v| v.name.len()).max().unwrap_or(0);
     for v in &cal.values {
         let value = match (v.std_error, v.at_bound) {
-            (_, Some(bound)) => format!("{:.6} (at its {bound} bound; not determined)", v.value),
-            (Some(se), None) => format!("{:.6} ± {:.2e}", v.value, se),
+            (_, Some(bound)) => format!("{} (at its {bound} bound; not determined)", num(v.value)),
+            (Some(se), None) => format!("{} ± {}", num(v.value), num(se)),
             (None, None) => format!(
-                "{:.6} (not determined: the outputs cannot tell it from the other unknowns)",
-                v.value
+                "{} (not determined: the outputs cannot tell it from the other unknowns)",
+                num(v.value)
             ),
         };
         out.push_str(&format!(
             "  {:width$}  {value} {}   (from {})\n",
-            v.name, v.unit, v.start,
+            v.name,
+            v.unit,
+            num(v.start),
         ));
     }
     let n = cal.values.len();
@@ -187,7 +190,9 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
     out.push_str("RMS error before → after:\n");
     for ((name, before), (_, after)) in cal.rms_before.iter().zip(&cal.rms_after) {
         out.push_str(&format!(
-            "  {name}: {before:.6} → {after:.6} {}\n",
+            "  {name}: {} → {} {}\n",
+            num(*before),
+            num(*after),
             model.unit(name)
         ));
     }
