@@ -548,7 +548,7 @@ impl PyRankedCandidate {
     /// How the fit ended.
     #[getter]
     fn termination(&self) -> String {
-        format!("{:?}", self.inner.termination).to_lowercase()
+        self.inner.termination.to_string()
     }
     /// Whether the qualitative diagnosis agrees (None when it has no opinion).
     #[getter]

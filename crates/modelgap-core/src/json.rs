@@ -90,7 +90,7 @@ pub fn candidate_json(ex: &Explanation, r: &RankedCandidate) -> Value {
         "score": finite(r.score),
         "qualitative": r.qualitative,
         "equivalent": r.equivalent,
-        "termination": format!("{:?}", r.termination).to_lowercase(),
+        "termination": r.termination.to_string(),
         "error": r.error,
         "calibration": r.calibration.as_ref().map(|c| {
             (c.candidate.params.iter().zip(&c.values))

@@ -464,7 +464,7 @@ class RankedCandidate:
 
     @property
     def termination(self) -> str:
-        """How the fit ended: ``"converged"``, ``"maxiterations"``, ``"stalled"`` or
+        """How the fit ended: ``"converged"``, ``"max-iterations"``, ``"stalled"`` or
         ``"cancelled"``."""
 
     @property
