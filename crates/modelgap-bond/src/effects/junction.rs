@@ -127,14 +127,7 @@ impl Junction {
         name: String,
         params: Vec<EffectParam>,
     ) -> Candidate {
-        let at = self.name(g);
-        Candidate {
-            id: tag.id(at),
-            name,
-            kind: EffectKind::MissingElement,
-            acts_on: at.to_string(),
-            params,
-        }
+        missing_element(tag, self.name(g), name, params)
     }
 
     /// "the shaft (1m)" from the junction's description, or "junction 1m".
@@ -202,5 +195,21 @@ pub(super) fn non_empty(targets: Vec<QualTarget>) -> Option<Vec<QualTarget>> {
         None
     } else {
         Some(targets)
+    }
+}
+
+/// A missing-element candidate of kind `tag` at the element called `at`.
+pub(super) fn missing_element(
+    tag: Tag,
+    at: &str,
+    name: String,
+    params: Vec<EffectParam>,
+) -> Candidate {
+    Candidate {
+        id: tag.id(at),
+        name,
+        kind: EffectKind::MissingElement,
+        acts_on: at.to_string(),
+        params,
     }
 }

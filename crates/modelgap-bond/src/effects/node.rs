@@ -2,7 +2,7 @@
 //! a tank's level, a thermal mass's temperature, a capacitor's voltage, a
 //! pressure node. Any domain; the words follow the C's unit when it has one.
 
-use modelgap_core::{Candidate, EffectKind, EffectParam};
+use modelgap_core::{Candidate, EffectParam};
 
 use super::edit::ident;
 use super::menu::place;
@@ -150,13 +150,6 @@ impl Node {
         name: String,
         params: Vec<EffectParam>,
     ) -> Candidate {
-        let at = self.name(g);
-        Candidate {
-            id: tag.id(at),
-            name,
-            kind: EffectKind::MissingElement,
-            acts_on: at.to_string(),
-            params,
-        }
+        super::junction::missing_element(tag, self.name(g), name, params)
     }
 }

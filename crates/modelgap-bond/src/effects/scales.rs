@@ -56,6 +56,22 @@ fn positive_or(x: f64, fallback: f64) -> f64 {
     }
 }
 
+/// A junction's level: the largest magnitude of the effort (or, with
+/// `flow`, the flow) on its bonds.
+fn level(g: &BondGraph, vars: &BTreeMap<Var, f64>, j: ElementId, flow: bool) -> f64 {
+    (g.ports(j).iter())
+        .map(|(b, _)| {
+            let v = if flow {
+                Var::F(b.number())
+            } else {
+                Var::E(b.number())
+            };
+            vars.get(&v).copied().unwrap_or(0.0).abs()
+        })
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max)
+}
+
 /// The model's own scales: per 1-junction effort and flow levels, per storage
 /// element the peak state, and the slowest mode's rate (see the
 /// [module docs](super) for how they are found). The candidates' scales and
@@ -94,20 +110,7 @@ impl Scales {
             .element_ids()
             .filter(|&id| g.element(id).kind.is_junction())
             .collect();
-        let level = |vars: &BTreeMap<Var, f64>, j: ElementId, flow: bool| -> f64 {
-            g.ports(j)
-                .iter()
-                .map(|(b, _)| {
-                    let v = if flow {
-                        Var::F(b.number())
-                    } else {
-                        Var::E(b.number())
-                    };
-                    vars.get(&v).copied().unwrap_or(0.0).abs()
-                })
-                .filter(|v| v.is_finite())
-                .fold(0.0, f64::max)
-        };
+        let level = |vars: &BTreeMap<Var, f64>, j, flow| level(g, vars, j, flow);
         if let Some(x) = &steady {
             let vars = model.variable_values(0.0, x, &u);
             for &j in &junctions {
@@ -150,19 +153,7 @@ impl Scales {
             .element_ids()
             .filter(|&id| g.element(id).kind.is_junction())
             .collect();
-        let level = |vars: &BTreeMap<Var, f64>, j: ElementId, flow: bool| -> f64 {
-            (g.ports(j).iter())
-                .map(|(b, _)| {
-                    let v = if flow {
-                        Var::F(b.number())
-                    } else {
-                        Var::E(b.number())
-                    };
-                    vars.get(&v).copied().unwrap_or(0.0).abs()
-                })
-                .filter(|v| v.is_finite())
-                .fold(0.0, f64::max)
-        };
+        let level = |vars: &BTreeMap<Var, f64>, j, flow| level(g, vars, j, flow);
         let n = model.n_states();
         let mut x = vec![0.0; n];
         let mut u: Vec<f64> = model.input_defaults.clone();
