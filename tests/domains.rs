@@ -318,3 +318,117 @@ fn a_model_without_units_gets_the_generic_set_and_a_note() {
             .any(|c| c.id == "leak@tank1" && c.name.starts_with("leakage from"))
     );
 }
+
+/// A mass on a spring with damping, driven by a force `u`; no units (nothing on the built-in
+/// menu knows it), with a user-declared cubic spring beside the linear one.
+const OSCILLATOR: &str = r#"name = "oscillator"
+[parameters]
+m = { value = 1.0 }
+d = { value = 0.4 }
+a = { value = 4.0 }
+[inputs]
+u = { default = 0.0 }
+[[elements]]
+name = "force"
+kind = "Se"
+effort = "u"
+[[elements]]
+name = "body"
+kind = "1"
+[[elements]]
+name = "mass"
+kind = "I"
+parameter = "m"
+[[elements]]
+name = "damper"
+kind = "R"
+parameter = "d"
+[[elements]]
+name = "spring"
+kind = "C"
+effort = "a * q"
+[[bonds]]
+from = "force"
+to = "body"
+[[bonds]]
+from = "body"
+to = "mass"
+[[bonds]]
+from = "body"
+to = "damper"
+[[bonds]]
+from = "body"
+to = "spring"
+[[outputs]]
+name = "x"
+state = "spring"
+
+[[candidates]]
+name = "cubic"
+kind = "C"
+at = "body"
+effort = "b * q^3"
+description = "a cubic spring beside the linear one"
+[candidates.parameters]
+b = { value = 0.0, min = -50.0, max = 50.0 }
+"#;
+
+#[test]
+fn a_declared_candidate_is_ranked_with_the_menu_and_fix_builds_it_in() {
+    // The truth: a hardening spring 4 x + 2.5 x³ (the declared law's form, the one the
+    // user suspects), driven by a staircase force, coloured noise.
+    let truth = OSCILLATOR.replace("effort = \"a * q\"", "effort = \"a * q + 2.5 * q^3\"");
+    let truth = &truth[..truth.find("[[candidates]]").unwrap()];
+    let rec = record(truth, "u", &[2.0, -3.0, 5.0, -1.0, 4.0], 8.0, &["x"], 0.005);
+    let model = BondModel::new(read_model(OSCILLATOR).unwrap());
+    let ex = explain(&model, &rec, &ExplainOptions::default()).unwrap();
+    let best = ex.chosen.first().expect("an effect is chosen");
+    assert_eq!(
+        best.candidate.id, "declared:cubic",
+        "{}",
+        best.candidate.name
+    );
+    assert!(
+        (best.params[0].value - 2.5).abs() < 0.1,
+        "{:?}",
+        best.params
+    );
+    // fix builds it in as a real element and takes it off the list.
+    let fixed = modelgap::Model::with_effects(&model, &ex.effects()).unwrap();
+    let text = fixed.to_file_text().unwrap();
+    let back = read_model(&text).unwrap();
+    assert!(back.declared().is_empty(), "{text}");
+    assert!(back.find("cubic").is_some(), "{text}");
+    assert!((back.param("b").unwrap() - 2.5).abs() < 0.1);
+}
+
+#[test]
+fn declared_candidates_round_trip_and_bad_ones_name_the_line() {
+    let g = read_model(OSCILLATOR).unwrap();
+    assert_eq!(g.declared().len(), 1);
+    let text = modelgap::bond::file::write_model(&g);
+    assert!(text.contains("[[candidates]]") && text.contains("[candidates.parameters]"));
+    assert_eq!(read_model(&text).unwrap(), g);
+    for (from, to, expected) in [
+        ("at = \"body\"", "at = \"nowhere\"", "nowhere"),
+        ("at = \"body\"", "at = \"mass\"", "not a junction"),
+        ("effort = \"b * q^3\"", "effort = \"c * q^3\"", "'c'"),
+        (
+            "min = -50.0, max = 50.0",
+            "min = 50.0, max = -50.0",
+            "min < max",
+        ),
+        ("kind = \"C\"\nat", "kind = \"TF\"\nat", "one-port"),
+        ("name = \"cubic\"", "name = \"spring\"", "spring"),
+    ] {
+        assert!(OSCILLATOR.contains(from), "{from}");
+        let message = read_model(&OSCILLATOR.replacen(from, to, 1))
+            .expect_err(to)
+            .to_string();
+        assert!(
+            message.contains(expected),
+            "{to}: expected '{expected}' in {message}"
+        );
+        assert!(message.contains("line "), "{to}: {message}");
+    }
+}

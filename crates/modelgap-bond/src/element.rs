@@ -459,3 +459,17 @@ pub struct Output {
     /// Unit, as text.
     pub unit: String,
 }
+
+/// An effect a model file declares for explain to try (`[[candidates]]`): an
+/// element with its law, bonded from junction `at`, whose parameters are
+/// fitted within their bounds. `fix` builds it in as a real element.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DeclaredCandidate {
+    /// The element to add (its name is the candidate's name).
+    pub element: Element,
+    /// The junction it is bonded from.
+    pub at: String,
+    /// Its parameters, by name, each with the bounds it is fitted within
+    /// (`free` always `Some`).
+    pub params: Vec<(String, Parameter)>,
+}

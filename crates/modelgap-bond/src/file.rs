@@ -50,6 +50,11 @@
 //! unit = "A"              # or value = "<expression of signals>" (`2 * C.q + 0.1`)
 //! ```
 //!
+//! `[[candidates]]` declares effects for explain to try: a one-port with
+//! its law (as in `[[elements]]`), the junction `at` it is bonded from and
+//! `[candidates.parameters]` with `value`, `min`, `max` (see
+//! [`crate::effects::Declared`]).
+//!
 //! A parameter marked `free = true` takes bounds `min`/`max`; without them it
 //! may range from 0 to 1000 times its value, its sign kept (a free value of 0
 //! must give both).
@@ -70,7 +75,8 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use crate::element::{
-    Element, ElementKind, InitialState, Law, Measured, Output, PhysicalDomain, Range,
+    DeclaredCandidate, Element, ElementKind, InitialState, Law, Measured, Output, Parameter,
+    PhysicalDomain, Range,
 };
 use crate::error::{BondError, Result};
 use crate::expr::{Expr, parse};
@@ -94,6 +100,37 @@ struct ModelFile {
     outputs: Vec<Spanned<OutputEntry>>,
     #[serde(default)]
     initial: BTreeMap<String, Spanned<InitialEntry>>,
+    #[serde(default)]
+    candidates: Vec<Spanned<CandidateEntry>>,
+}
+
+/// A declared candidate: an element (its law as in `[[elements]]`), the
+/// junction it is bonded from, and its parameters with bounds.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CandidateEntry {
+    name: Spanned<String>,
+    kind: Spanned<String>,
+    at: Spanned<String>,
+    parameter: Option<Spanned<String>>,
+    effort: Option<Spanned<String>>,
+    flow: Option<Spanned<String>>,
+    #[serde(default)]
+    description: String,
+    #[serde(default)]
+    parameters: BTreeMap<String, Spanned<CandidateParam>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CandidateParam {
+    value: f64,
+    #[serde(default)]
+    unit: String,
+    #[serde(default)]
+    description: String,
+    min: f64,
+    max: f64,
 }
 
 /// An initial state: a number, or a table with bounds when it is unknown.
@@ -239,49 +276,12 @@ impl Ctx<'_> {
     }
 }
 
-/// Reads a model from TOML text.
-///
-/// # Errors
-/// [`BondError::File`] with the line and column of the problem: TOML
-/// syntax, unknown fields, unknown element kinds, laws that do not parse,
-/// bonds to unknown elements, wrong bond counts, unknown names in laws,
-/// coefficients an element cannot physically have (a zero inductance, a
-/// negative resistance: the line of the parameter's value) or that are not
-/// finite (`1/0`).
-pub fn read_model(src: &str) -> Result<BondGraph> {
-    let file: ModelFile = toml::from_str(src).map_err(|e| {
-        let (line, column) = e.span().map_or((1, 1), |s| line_col(src, s.start));
-        BondError::File {
-            line,
-            column,
-            message: e.message().trim().to_string(),
-            path: None,
-        }
-    })?;
-    let ctx = Ctx { src };
-    let mut g = BondGraph::new();
-    g.name = file.name;
-    g.description = file.description;
-    for (name, p) in &file.parameters {
-        let span = p.span();
-        let p = p.get_ref();
-        g.add_param(name, p.value, &p.unit, &p.description)
-            .map_err(|e| ctx.err(span.clone(), e.to_string()))?;
-        let range = free_range(name, p.value, p.free, p.min, p.max)
-            .map_err(|m| ctx.err(span.clone(), format!("parameter {m}")))?;
-        g.set_free(name, range)
-            .map_err(|e| ctx.err(span, format!("parameter {e}")))?;
-    }
-    for (name, i) in &file.inputs {
-        let span = i.span();
-        let i = i.get_ref();
-        g.add_input(name, i.default, &i.unit, &i.description)
-            .map_err(|e| ctx.err(span, e.to_string()))?;
-    }
-    let mut element_spans = Vec::new();
-    for entry in &file.elements {
-        let span = entry.span();
-        let e = entry.get_ref();
+impl Ctx<'_> {
+    /// The element an `[[elements]]` entry (or a declared candidate's
+    /// element) describes: its kind, its law checked against the kind, its
+    /// declared domain.
+    fn element(&self, e: &ElementEntry, span: std::ops::Range<usize>) -> Result<Element> {
+        let ctx = self;
         let name = e.name.get_ref().clone();
         // 20-sim's modulated sources: a source whose value reads signals.
         let modulated = matches!(e.kind.get_ref().as_str(), "MSe" | "MSf");
@@ -339,9 +339,9 @@ pub fn read_model(src: &str) -> Result<BondGraph> {
         } else if let Some(p) = parameter {
             if let Some(x) = e.effort.as_ref().or(e.flow.as_ref()) {
                 return Err(ctx.err(
-                    x.span(),
-                    format!("element '{name}': give a linear `parameter` or nonlinear `effort`/`flow` laws, not both"),
-                ));
+                x.span(),
+                format!("element '{name}': give a linear `parameter` or nonlinear `effort`/`flow` laws, not both"),
+            ));
             }
             Law::Linear(ctx.law(&name, "parameter", p)?)
         } else if kind.is_two_port() {
@@ -362,9 +362,9 @@ pub fn read_model(src: &str) -> Result<BondGraph> {
                 .transpose()?;
             if effort.is_none() && flow.is_none() {
                 return Err(ctx.err(
-                    span.clone(),
-                    format!("element '{name}': a {kind} needs `parameter = \"...\"` or a nonlinear `effort`/`flow` law"),
-                ));
+                span.clone(),
+                format!("element '{name}': a {kind} needs `parameter = \"...\"` or a nonlinear `effort`/`flow` law"),
+            ));
             }
             Law::Nonlinear { effort, flow }
         };
@@ -394,6 +394,54 @@ pub fn read_model(src: &str) -> Result<BondGraph> {
             description: e.description.clone(),
             domain,
         };
+        Ok(element)
+    }
+}
+
+/// Reads a model from TOML text.
+///
+/// # Errors
+/// [`BondError::File`] with the line and column of the problem: TOML
+/// syntax, unknown fields, unknown element kinds, laws that do not parse,
+/// bonds to unknown elements, wrong bond counts, unknown names in laws,
+/// coefficients an element cannot physically have (a zero inductance, a
+/// negative resistance: the line of the parameter's value) or that are not
+/// finite (`1/0`).
+pub fn read_model(src: &str) -> Result<BondGraph> {
+    let file: ModelFile = toml::from_str(src).map_err(|e| {
+        let (line, column) = e.span().map_or((1, 1), |s| line_col(src, s.start));
+        BondError::File {
+            line,
+            column,
+            message: e.message().trim().to_string(),
+            path: None,
+        }
+    })?;
+    let ctx = Ctx { src };
+    let mut g = BondGraph::new();
+    g.name = file.name;
+    g.description = file.description;
+    for (name, p) in &file.parameters {
+        let span = p.span();
+        let p = p.get_ref();
+        g.add_param(name, p.value, &p.unit, &p.description)
+            .map_err(|e| ctx.err(span.clone(), e.to_string()))?;
+        let range = free_range(name, p.value, p.free, p.min, p.max)
+            .map_err(|m| ctx.err(span.clone(), format!("parameter {m}")))?;
+        g.set_free(name, range)
+            .map_err(|e| ctx.err(span, format!("parameter {e}")))?;
+    }
+    for (name, i) in &file.inputs {
+        let span = i.span();
+        let i = i.get_ref();
+        g.add_input(name, i.default, &i.unit, &i.description)
+            .map_err(|e| ctx.err(span, e.to_string()))?;
+    }
+    let mut element_spans = Vec::new();
+    for entry in &file.elements {
+        let span = entry.span();
+        let e = entry.get_ref();
+        let element = ctx.element(e, span)?;
         g.add(element)
             .map_err(|err| ctx.err(e.name.span(), err.to_string()))?;
         element_spans.push(e.name.span());
@@ -498,6 +546,70 @@ pub fn read_model(src: &str) -> Result<BondGraph> {
             None => err,
         });
     }
+    for entry in &file.candidates {
+        let c = entry.get_ref();
+        let symbol = c.kind.get_ref().trim_start_matches('M');
+        if !matches!(symbol, "R" | "C" | "I" | "Se" | "Sf") {
+            return Err(ctx.err(
+                c.kind.span(),
+                format!(
+                    "candidate '{}': a declared candidate is a one-port (R, C, I, Se, Sf), not a {}",
+                    c.name.get_ref(),
+                    c.kind.get_ref()
+                ),
+            ));
+        }
+        let element = ctx.element(
+            &ElementEntry {
+                name: c.name.clone(),
+                kind: c.kind.clone(),
+                parameter: c.parameter.clone(),
+                modulus: None,
+                effort: c.effort.clone(),
+                flow: c.flow.clone(),
+                description: c.description.clone(),
+                domain: None,
+            },
+            entry.span(),
+        )?;
+        let mut params = Vec::new();
+        for (name, p) in &c.parameters {
+            let span = p.span();
+            let p = p.get_ref();
+            let range = Range {
+                lower: p.min,
+                upper: p.max,
+            };
+            if !(p.min.is_finite() && p.max.is_finite() && p.min < p.max && range.contains(p.value))
+            {
+                return Err(ctx.err(
+                    span,
+                    format!(
+                        "candidate '{}': parameter '{name}' needs finite min < max around its value {} (found [{}, {}])",
+                        c.name.get_ref(),
+                        p.value,
+                        p.min,
+                        p.max
+                    ),
+                ));
+            }
+            params.push((
+                name.clone(),
+                Parameter {
+                    value: p.value,
+                    unit: p.unit.clone(),
+                    description: p.description.clone(),
+                    free: Some(range),
+                },
+            ));
+        }
+        g.add_declared(DeclaredCandidate {
+            element,
+            at: c.at.get_ref().clone(),
+            params,
+        })
+        .map_err(|e| ctx.err(entry.span(), e.to_string()))?;
+    }
     Ok(g)
 }
 
@@ -547,6 +659,37 @@ fn num(v: f64) -> String {
         s
     } else {
         format!("{s}.0")
+    }
+}
+
+/// The law fields of an element, as `[[elements]]` writes them.
+fn write_law(s: &mut String, el: &Element) {
+    match &el.law {
+        Law::None => {}
+        Law::Source(v) => {
+            let field = if el.kind == ElementKind::Se {
+                "effort"
+            } else {
+                "flow"
+            };
+            let _ = writeln!(s, "{field} = {}", q(&v.to_string()));
+        }
+        Law::Linear(p) => {
+            let field = if el.kind.is_two_port() {
+                "modulus"
+            } else {
+                "parameter"
+            };
+            let _ = writeln!(s, "{field} = {}", q(&p.to_string()));
+        }
+        Law::Nonlinear { effort, flow } => {
+            if let Some(e) = effort {
+                let _ = writeln!(s, "effort = {}", q(&e.to_string()));
+            }
+            if let Some(f) = flow {
+                let _ = writeln!(s, "flow = {}", q(&f.to_string()));
+            }
+        }
     }
 }
 
@@ -604,33 +747,7 @@ pub fn write_model(g: &BondGraph) -> String {
             q(&el.name),
             q(&el.symbol())
         );
-        match &el.law {
-            Law::None => {}
-            Law::Source(v) => {
-                let field = if el.kind == ElementKind::Se {
-                    "effort"
-                } else {
-                    "flow"
-                };
-                let _ = writeln!(s, "{field} = {}", q(&v.to_string()));
-            }
-            Law::Linear(p) => {
-                let field = if el.kind.is_two_port() {
-                    "modulus"
-                } else {
-                    "parameter"
-                };
-                let _ = writeln!(s, "{field} = {}", q(&p.to_string()));
-            }
-            Law::Nonlinear { effort, flow } => {
-                if let Some(e) = effort {
-                    let _ = writeln!(s, "effort = {}", q(&e.to_string()));
-                }
-                if let Some(f) = flow {
-                    let _ = writeln!(s, "flow = {}", q(&f.to_string()));
-                }
-            }
-        }
+        write_law(&mut s, el);
         if !el.description.is_empty() {
             let _ = writeln!(s, "description = {}", q(&el.description));
         }
@@ -684,6 +801,42 @@ pub fn write_model(g: &BondGraph) -> String {
             q(&text),
             q(&o.unit)
         );
+    }
+    for c in g.declared() {
+        let el = &c.element;
+        let _ = writeln!(
+            s,
+            "\n[[candidates]]\nname = {}\nkind = {}\nat = {}",
+            q(&el.name),
+            q(&el.symbol()),
+            q(&c.at)
+        );
+        write_law(&mut s, el);
+        if !el.description.is_empty() {
+            let _ = writeln!(s, "description = {}", q(&el.description));
+        }
+        if !c.params.is_empty() {
+            let _ = writeln!(s, "[candidates.parameters]");
+        }
+        for (name, p) in &c.params {
+            let r = p.free.unwrap_or(Range {
+                lower: p.value,
+                upper: p.value,
+            });
+            let _ = write!(
+                s,
+                "{} = {{ value = {}, unit = {}, min = {}, max = {}",
+                key(name),
+                num(p.value),
+                q(&p.unit),
+                num(r.lower),
+                num(r.upper)
+            );
+            if !p.description.is_empty() {
+                let _ = write!(s, ", description = {}", q(&p.description));
+            }
+            s.push_str(" }\n");
+        }
     }
     s
 }

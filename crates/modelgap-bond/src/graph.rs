@@ -17,7 +17,8 @@ use std::fmt;
 use modelgap_core::recording::MAX_MAGNITUDE;
 
 use crate::element::{
-    Element, ElementKind, InitialState, InputSignal, Law, Output, Parameter, Range,
+    DeclaredCandidate, Element, ElementKind, InitialState, InputSignal, Law, Output, Parameter,
+    Range,
 };
 use crate::error::{BondError, Result};
 use crate::expr::Expr;
@@ -117,6 +118,8 @@ pub struct BondGraph {
     outputs: Vec<Output>,
     /// Initial states by storage element (absent: 0).
     initial: BTreeMap<String, InitialState>,
+    /// Effects the model file declares for explain to try.
+    declared: Vec<DeclaredCandidate>,
 }
 
 /// Checks that `range` is finite, ordered and holds `value`.
@@ -410,6 +413,65 @@ impl BondGraph {
         check_range(&label, state.value, state.free)?;
         self.initial.insert(element.to_string(), state);
         Ok(())
+    }
+
+    /// The effects the model declares for explain to try (`[[candidates]]`).
+    pub fn declared(&self) -> &[DeclaredCandidate] {
+        &self.declared
+    }
+
+    /// `self` with the declared candidate built in at its parameters'
+    /// values: the parameters added, the element bonded from its junction.
+    /// The candidate itself is not removed (see
+    /// [`BondGraph::remove_declared`]).
+    ///
+    /// # Errors
+    /// Graph errors: a name taken, an unknown junction, a law that names
+    /// what the model does not have, a broken structure.
+    pub fn with_declared(&self, c: &DeclaredCandidate) -> Result<BondGraph> {
+        let mut g = self.clone();
+        for (name, p) in &c.params {
+            g.add_param(name, p.value, &p.unit, &p.description)?;
+        }
+        let at = g.require(&c.at, &format!(" for candidate '{}'", c.element.name))?;
+        let id = g.add(c.element.clone())?;
+        g.bond(at, id)?;
+        g.validate()?;
+        Ok(g)
+    }
+
+    /// Adds a declared candidate, after checking that it builds into the
+    /// model ([`BondGraph::with_declared`]) and that its junction is a
+    /// junction.
+    ///
+    /// # Errors
+    /// [`BondError::BadLaw`] naming the candidate for a junction that is
+    /// not one or a duplicate name; the errors of building it in.
+    pub fn add_declared(&mut self, c: DeclaredCandidate) -> Result<()> {
+        let name = c.element.name.clone();
+        let bad = |detail: String| BondError::BadLaw {
+            element: format!("candidate {name}"),
+            detail,
+        };
+        if self.declared.iter().any(|d| d.element.name == name) {
+            return Err(bad("is declared twice".to_string()));
+        }
+        let at = self.require(&c.at, &format!(" for candidate '{name}'"))?;
+        if !self.element(at).kind.is_junction() {
+            return Err(bad(format!(
+                "is bonded at '{}', which is not a junction (0 or 1)",
+                c.at
+            )));
+        }
+        self.with_declared(&c)
+            .map_err(|e| bad(format!("does not build into the model: {e}")))?;
+        self.declared.push(c);
+        Ok(())
+    }
+
+    /// Removes the declared candidate called `name` (once it is built in).
+    pub fn remove_declared(&mut self, name: &str) {
+        self.declared.retain(|d| d.element.name != name);
     }
 
     /// All parameters, by name.

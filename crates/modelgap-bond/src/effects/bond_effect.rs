@@ -8,8 +8,8 @@ use super::edit::bad;
 use super::scales::Scales;
 use super::tag::Tag;
 use super::{
-    Brush, Calibration, Cogging, Coulomb, Coupling, Deviation, Factor, Fault, Faulted, Inertia,
-    Inflow, Junction, Leak, Load, Node, Overflow, Saturation, Stiffness, Viscous,
+    Brush, Calibration, Cogging, Coulomb, Coupling, Declared, Deviation, Factor, Fault, Faulted,
+    Inertia, Inflow, Junction, Leak, Load, Node, Overflow, Saturation, Stiffness, Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::BondGraph;
@@ -48,6 +48,8 @@ pub enum BondEffect {
     Inflow(Inflow),
     /// `overflow@<node>`: outflow above a threshold.
     Overflow(Overflow),
+    /// `declared:<name>`: an effect the model file declares.
+    Declared(Declared),
     /// `calibration`: the graph's free parameters and initial states (never
     /// on the menu; see [`Calibration`]).
     Calibration(Calibration),
@@ -78,6 +80,7 @@ from_kind!(
     Leak,
     Inflow,
     Overflow,
+    Declared,
     Calibration
 );
 
@@ -169,6 +172,11 @@ impl BondEffect {
             Tag::Leak => Some(BondEffect::Leak(Leak { node: node()? })),
             Tag::Inflow => Some(BondEffect::Inflow(Inflow { node: node()? })),
             Tag::Overflow => Some(BondEffect::Overflow(Overflow { node: node()? })),
+            Tag::Declared => Some(BondEffect::Declared(
+                Declared::named(g, target).ok_or_else(|| {
+                    bad(c, "", format!("the model declares no candidate '{target}'"))
+                })?,
+            )),
             Tag::Viscous => Viscous::at(junction()?).map(Into::into),
             Tag::Coulomb => Coulomb::at(junction()?).map(Into::into),
             Tag::Load => Load::at(junction()?).map(Into::into),
@@ -201,6 +209,7 @@ impl BondEffect {
             BondEffect::Leak(k) => k,
             BondEffect::Inflow(k) => k,
             BondEffect::Overflow(k) => k,
+            BondEffect::Declared(k) => k,
             BondEffect::Calibration(k) => k,
         }
     }
@@ -224,6 +233,7 @@ impl BondEffect {
             | BondEffect::Leak(_)
             | BondEffect::Inflow(_)
             | BondEffect::Overflow(_)
+            | BondEffect::Declared(_)
             | BondEffect::Calibration(_) => None,
         }
     }
@@ -261,7 +271,7 @@ impl BondEffect {
         }
         let (tag, _) = Tag::read(&c.id)?;
         match tag {
-            Tag::Deviation | Tag::Fault | Tag::Calibration => None,
+            Tag::Deviation | Tag::Fault | Tag::Declared | Tag::Calibration => None,
             Tag::Viscous => Viscous::vanishing_values(c),
             Tag::Coulomb => Coulomb::vanishing_values(c),
             Tag::Load => Load::vanishing_values(c),

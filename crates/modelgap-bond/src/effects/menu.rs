@@ -7,8 +7,8 @@ use super::bond_effect::BondEffect;
 use super::def::EffectDef;
 use super::scales::Scales;
 use super::{
-    Brush, Cogging, Coulomb, Coupling, Deviation, Factor, Fault, Inertia, Inflow, Leak, Load,
-    Overflow, Saturation, Stiffness, Viscous,
+    Brush, Cogging, Coulomb, Coupling, Declared, Deviation, Factor, Fault, Inertia, Inflow, Leak,
+    Load, Overflow, Saturation, Stiffness, Viscous,
 };
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
@@ -47,6 +47,7 @@ use crate::graph::{BondGraph, ElementId};
 ///   follow the C's unit: hydraulic, thermal, electrical or generic):
 ///   `leak@<n>` (`f = G e`, `G` ≥ 0), `inflow@<n>` (a constant `Q`, either
 ///   sign) and `overflow@<n>` (`f = k_o max(e − e_max, 0)`, `e_max` on a grid).
+/// - Each effect the model file declares (`[[candidates]]`): `declared:<name>`.
 /// - For each electrical I with a linear law: `saturation@<I>`
 ///   (`f = p / L · (1 + a_sat p²)`, `a_sat` ≥ 0 in 1/Wb², scale `0.1 / p_peak²`
 ///   with `p_peak` the peak flux of a start-up).
@@ -114,6 +115,7 @@ pub fn offered(g: &BondGraph) -> Vec<BondEffect> {
         .collect();
     on_nodes.sort_by_key(|(id, _)| *id);
     out.extend(on_nodes.into_iter().map(|(_, e)| e));
+    out.extend(of::<Declared>(g));
     out
 }
 

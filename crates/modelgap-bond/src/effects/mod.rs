@@ -56,6 +56,7 @@
 //!   domain: [`stiffness`](Stiffness) (a cubic term); on storage nodes
 //!   ([`Node`]: a 0-junction with a C, any domain): [`leak`](Leak),
 //!   [`inflow`](Inflow), [`overflow`](Overflow);
+//! - declared by the model file (`[[candidates]]`): [`declared`](Declared);
 //! - never on the menu: [`calibration`](Calibration), the graph's own unknowns
 //!   (free parameters and initial states) that calibration fits.
 //!
@@ -73,6 +74,7 @@ mod calibration;
 mod cogging;
 mod coulomb;
 mod coupling;
+mod declared;
 mod def;
 mod deviation;
 mod domain;
@@ -106,6 +108,7 @@ pub use cogging::Cogging;
 pub(crate) use cogging::is_periodic;
 pub use coulomb::Coulomb;
 pub use coupling::Coupling;
+pub use declared::Declared;
 pub use def::{EffectDef, QualTarget};
 pub use deviation::Deviation;
 pub use domain::Domain;

@@ -21,11 +21,12 @@ pub(super) enum Tag {
     Leak,
     Inflow,
     Overflow,
+    Declared,
     Calibration,
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 15] = [
+const PREFIXES: [(Tag, &str); 16] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -40,6 +41,7 @@ const PREFIXES: [(Tag, &str); 15] = [
     (Tag::Leak, "leak@"),
     (Tag::Inflow, "inflow@"),
     (Tag::Overflow, "overflow@"),
+    (Tag::Declared, "declared:"),
     (Tag::Calibration, "calibration"),
 ];
 
@@ -99,7 +101,7 @@ mod tests {
     fn the_expected_prefixes_read_as_a_list() {
         assert_eq!(
             Tag::expected(),
-            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, stiffness@, leak@, inflow@ or overflow@"
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, stiffness@, leak@, inflow@, overflow@ or declared:"
         );
     }
 }
