@@ -145,7 +145,7 @@ fn cases() -> Vec<Case> {
         ),
         case(
             "csv: header without t",
-            vec![text("run.csv", &csv_with_line(1, "time,V,i,omega"))],
+            vec![text("run.csv", &csv_with_line(1, "when,V,i,omega"))],
             &loop_args("compare"),
             2,
             &["missing column `t`", "line 1", "run.csv"],

@@ -70,7 +70,7 @@ def load_text(tmp: Path, name: str, text: str | bytes, loader: Callable[[Path], 
 # (class, what to do given a temporary folder, exception type, message pattern)
 CASES: list[tuple[str, Callable[[Path], object], type[Exception], str]] = [
     ("csv: empty", lambda d: load_text(d, "r.csv", "", modelgap.Recording.load), DataError, r"no header line .*r\.csv"),
-    ("csv: no t column", lambda d: load_text(d, "r.csv", csv_with_line(1, "time,V,i,omega"), modelgap.Recording.load),
+    ("csv: no t column", lambda d: load_text(d, "r.csv", csv_with_line(1, "when,V,i,omega"), modelgap.Recording.load),
      DataError, r"missing column `t`.*line 1"),
     ("csv: duplicate column", lambda d: load_text(d, "r.csv", csv_with_line(1, "t,V,i,i"), modelgap.Recording.load),
      DataError, r"duplicate signal `i`"),

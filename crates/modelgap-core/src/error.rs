@@ -128,16 +128,81 @@ pub enum CoreError {
         path: Option<PathBuf>,
     },
 
-    /// The CSV header does not start with the time column `t`.
-    #[error(
-        "missing column `t`: the header at line {line} must start with `t`, found `{found}`{}",
-        in_path(.path)
-    )]
+    /// The CSV header has no time column: none named `t` or `time`, or none of the name
+    /// asked for.
+    #[error("{}{}", missing_time(*.line, .asked, .columns), in_path(.path))]
     MissingTimeColumn {
         /// The header line, counted from 1.
         line: usize,
-        /// The first header cell as found.
-        found: String,
+        /// The time column asked for by name, if one was.
+        asked: Option<String>,
+        /// The header's columns as written.
+        columns: Vec<String>,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// Several CSV columns could be the time column.
+    #[error(
+        "columns {} of the header at line {line} could each be time: choose one with the time \
+         option (`--time COL`){}",
+        quoted(.columns),
+        in_path(.path)
+    )]
+    AmbiguousTimeColumn {
+        /// The header line, counted from 1.
+        line: usize,
+        /// The columns that could be time, as written.
+        columns: Vec<String>,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// The CSV time column has a unit that is not a unit of time modelgap reads.
+    #[error(
+        "time column `{column}` at line {line} has unit `{unit}`: expected s, ms, us or ns{}",
+        in_path(.path)
+    )]
+    TimeUnit {
+        /// The line that gives the unit (the header or the unit row), counted from 1.
+        line: usize,
+        /// The time column as written.
+        column: String,
+        /// The unit found.
+        unit: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A CSV cell holds a number whose decimal mark cannot be read safely (a decimal comma
+    /// with `,` between cells, or a file mixing `1.5` and `1,5`).
+    #[error(
+        "cannot read `{text}` as a number at line {line}, column `{column}`: {reason}{}",
+        in_path(.path)
+    )]
+    DecimalMark {
+        /// The line, counted from 1.
+        line: usize,
+        /// The column name from the header.
+        column: String,
+        /// The cell's text, trimmed.
+        text: String,
+        /// Why the mark is refused, and what to do.
+        reason: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A CSV line is badly quoted (a quote inside an unquoted cell, text after a closing
+    /// quote, a quoted cell that spans lines or never closes).
+    #[error("bad quoting at line {line}, cell {cell}: {reason}{}", in_path(.path))]
+    CsvQuoting {
+        /// The line where the record starts, counted from 1.
+        line: usize,
+        /// The cell, counted from 1.
+        cell: usize,
+        /// What is wrong.
+        reason: &'static str,
         /// The file, when known.
         path: Option<PathBuf>,
     },
@@ -422,6 +487,10 @@ impl CoreError {
             | Self::OutOfRange { path, .. }
             | Self::MissingHeader { path }
             | Self::MissingTimeColumn { path, .. }
+            | Self::AmbiguousTimeColumn { path, .. }
+            | Self::TimeUnit { path, .. }
+            | Self::DecimalMark { path, .. }
+            | Self::CsvQuoting { path, .. }
             | Self::DuplicateSignal { path, .. }
             | Self::InvalidSignalName { path, .. }
             | Self::EmptyRecording { path }
@@ -454,6 +523,10 @@ impl CoreError {
             | Self::OutOfRange { path, .. }
             | Self::MissingHeader { path }
             | Self::MissingTimeColumn { path, .. }
+            | Self::AmbiguousTimeColumn { path, .. }
+            | Self::TimeUnit { path, .. }
+            | Self::DecimalMark { path, .. }
+            | Self::CsvQuoting { path, .. }
             | Self::DuplicateSignal { path, .. }
             | Self::InvalidSignalName { path, .. }
             | Self::EmptyRecording { path }
@@ -500,6 +573,36 @@ fn at_location(at: &Option<Location>) -> String {
     match at {
         Some(at) => format!(" at {at}"),
         None => String::new(),
+    }
+}
+
+/// The message of [`CoreError::MissingTimeColumn`], without the path.
+fn missing_time(line: usize, asked: &Option<String>, columns: &[String]) -> String {
+    match asked {
+        Some(name) => format!(
+            "missing column `{name}`: the header at line {line} has no column `{name}` (with or \
+             without a unit); its columns are {}",
+            quoted(columns)
+        ),
+        None => format!(
+            "missing column `t`: the header at line {line} has no column `t` or `time` (with or \
+             without a unit); its columns are {}: choose the time column with the time option \
+             (`--time COL`)",
+            quoted(columns)
+        ),
+    }
+}
+
+/// Names as `` `a`, `b` ``, or `(none)`.
+fn quoted(items: &[String]) -> String {
+    if items.is_empty() {
+        "(none)".to_owned()
+    } else {
+        items
+            .iter()
+            .map(|i| format!("`{i}`"))
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 }
 

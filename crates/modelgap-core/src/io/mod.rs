@@ -3,7 +3,9 @@
 //! Each format has a pair of functions per direction: one that works on in-memory data
 //! (`read_signals`, `write_signals`) and one that opens the file and adds its path to errors
 //! (`read_signals_path`, `write_signals_path`). [`read_recording_path`] and
-//! [`write_recording_path`] pick the format from the file extension.
+//! [`write_recording_path`] pick the format from the file extension;
+//! [`read_recording_path_with`] also takes [`csv::CsvOptions`] for CSV files as other tools
+//! export them.
 
 pub mod atomic;
 pub mod csv;
@@ -65,6 +67,38 @@ pub fn read_recording_path(path: &Path) -> Result<Recording> {
     match Format::from_path(path)? {
         Format::Csv => csv::read_signals_path(path),
         Format::Mcap => mcap::read_signals_path(path, mcap::DEFAULT_SIGNAL_TOPIC),
+    }
+}
+
+/// Reads a recording as [`read_recording_path`] does, a `.csv` file with `options` (see
+/// [`csv::read_signals_with`]); returns it with the reader's notes (an index column left out,
+/// a unit row read, a time unit converted, a separator or decimal mark detected).
+///
+/// # Errors
+///
+/// As [`read_recording_path`]; [`CoreError::InvalidArgument`] for options other than the
+/// defaults with an `.mcap` file, which has no columns to choose.
+pub fn read_recording_path_with(
+    path: &Path,
+    options: &csv::CsvOptions,
+) -> Result<(Recording, Vec<String>)> {
+    match Format::from_path(path)? {
+        Format::Csv => {
+            let read = csv::read_signals_path_with(path, options)?;
+            Ok((read.recording, read.notes))
+        }
+        Format::Mcap if !options.is_default() => Err(CoreError::InvalidArgument {
+            name: "csv options",
+            reason: format!(
+                "a time column, a delimiter or a decimal mark applies to CSV files; {} is MCAP, \
+                 whose time is each message's log time",
+                path.display()
+            ),
+        }),
+        Format::Mcap => Ok((
+            mcap::read_signals_path(path, mcap::DEFAULT_SIGNAL_TOPIC)?,
+            Vec::new(),
+        )),
     }
 }
 
@@ -131,6 +165,14 @@ mod tests {
             write_recording_path(&path, &rec).unwrap();
             assert_eq!(read_recording_path(&path).unwrap(), rec, "{name}");
         }
+        let csv_path = dir.join("rec.csv");
+        let (back, notes) =
+            read_recording_path_with(&csv_path, &csv::CsvOptions::default().time("t")).unwrap();
+        assert_eq!((back, notes), (rec.clone(), Vec::new()));
+        let e =
+            read_recording_path_with(&dir.join("rec.mcap"), &csv::CsvOptions::default().time("t"))
+                .unwrap_err();
+        assert!(matches!(e, CoreError::InvalidArgument { .. }), "{e}");
         let bad = dir.join("rec.json");
         assert!(write_recording_path(&bad, &rec).is_err());
         assert!(!bad.exists());
