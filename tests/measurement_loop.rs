@@ -223,3 +223,32 @@ fn adding_the_found_effect_makes_the_error_fall() {
         "{text}"
     );
 }
+
+#[test]
+fn a_fault_that_fix_writes_is_a_change_the_file_makes() {
+    // The mid-run fault case: explain finds R changing at a time; the fixed
+    // model's file holds it as `[[changes]]`, and the file read back predicts
+    // what the fixed model predicts.
+    let c = case("fault");
+    let rec = record(&c, &RecordingOptions::default()).unwrap();
+    let model = BondModel::new(library::builtin(&c.model).unwrap());
+    let ex = explain(&model, &rec, &ExplainOptions::default()).unwrap();
+    let fixed = model.with_effects(&ex.effects()).unwrap();
+    let text = fixed.to_file_text().unwrap();
+    assert!(text.contains("[[changes]]"), "{text}");
+    assert!(!text.contains("# fault:"), "{text}");
+    let g = modelgap::bond::file::read_model(&text).unwrap();
+    assert_eq!(g.schedule().len(), 1, "{text}");
+    let read_back = BondModel::new(g);
+    let a = modelgap::compare(fixed.as_ref(), &rec, &Default::default()).unwrap();
+    let b = modelgap::compare(&read_back, &rec, &Default::default()).unwrap();
+    for (a, b) in a.outputs.iter().zip(&b.outputs) {
+        assert!(
+            (a.stats.rms - b.stats.rms).abs() <= 1e-9 * a.stats.rms,
+            "{}: fixed {} vs read back {}",
+            a.name,
+            a.stats.rms,
+            b.stats.rms
+        );
+    }
+}

@@ -146,8 +146,8 @@ pub fn run(args: &FixArgs) -> anyhow::Result<()> {
         out.push_str(&format!("added: {}\n", effect_line(r)));
         if r.candidate.kind == EffectKind::AbruptChange {
             out.push_str(
-                "note: an abrupt change happens during a run: the model file records it as a \
-                 `# fault:` comment, and a model read from the file does not make it\n",
+                "note: an abrupt change happens during a run: the model file holds it as a \
+                 `[[changes]]` entry, which every run of the file makes\n",
             );
         }
     }

@@ -405,6 +405,40 @@ pub struct InitialState {
     pub free: Option<Range>,
 }
 
+/// What a scheduled change changes.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Scheduled {
+    /// A parameter takes a new value (an abrupt fault, a load that steps).
+    Parameter(String),
+    /// An input not given by the recording steps to a new value (its
+    /// default before the first step).
+    Input(String),
+}
+
+impl Scheduled {
+    /// The parameter's or input's name.
+    pub fn name(&self) -> &str {
+        match self {
+            Scheduled::Parameter(n) | Scheduled::Input(n) => n,
+        }
+    }
+}
+
+/// A change at a given time, part of the model (`[[changes]]` in a model
+/// file): what `fix` writes when explain finds an abrupt change, and what a
+/// user writes for a step they know of.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScheduledChange {
+    /// When it happens (s, from the start of the run).
+    pub at: f64,
+    /// What changes.
+    pub what: Scheduled,
+    /// The value from `at` on.
+    pub value: f64,
+    /// Why (free text).
+    pub description: String,
+}
+
 /// A named input signal the model takes (a source value, a duty cycle).
 #[derive(Clone, Debug, PartialEq)]
 pub struct InputSignal {

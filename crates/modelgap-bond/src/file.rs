@@ -50,6 +50,10 @@
 //! unit = "A"              # or value = "<expression of signals>" (`2 * C.q + 0.1`)
 //! ```
 //!
+//! `[[changes]]` are changes at given times, part of every run: `at` (s),
+//! `parameter` or `input`, `value`, `description` — a load that steps, a
+//! fault `fix` found. An input the recording holds follows the recording.
+//!
 //! `[[candidates]]` declares effects for explain to try: a one-port with
 //! its law (as in `[[elements]]`), the junction `at` it is bonded from and
 //! `[candidates.parameters]` with `value`, `min`, `max` (see
@@ -76,7 +80,7 @@ use toml::Spanned;
 
 use crate::element::{
     DeclaredCandidate, Element, ElementKind, InitialState, Law, Measured, Output, Parameter,
-    PhysicalDomain, Range,
+    PhysicalDomain, Range, Scheduled, ScheduledChange,
 };
 use crate::error::{BondError, Result};
 use crate::expr::{Expr, parse};
@@ -102,6 +106,20 @@ struct ModelFile {
     initial: BTreeMap<String, Spanned<InitialEntry>>,
     #[serde(default)]
     candidates: Vec<Spanned<CandidateEntry>>,
+    #[serde(default)]
+    changes: Vec<Spanned<ChangeEntry>>,
+}
+
+/// A change at a given time: a parameter or an input takes a new value.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ChangeEntry {
+    at: Spanned<f64>,
+    parameter: Option<Spanned<String>>,
+    input: Option<Spanned<String>>,
+    value: Spanned<f64>,
+    #[serde(default)]
+    description: String,
 }
 
 /// A declared candidate: an element (its law as in `[[elements]]`), the
@@ -610,6 +628,36 @@ pub fn read_model(src: &str) -> Result<BondGraph> {
         })
         .map_err(|e| ctx.err(entry.span(), e.to_string()))?;
     }
+    for entry in &file.changes {
+        let c = entry.get_ref();
+        let (what, name_span) = match (&c.parameter, &c.input) {
+            (Some(p), None) => (Scheduled::Parameter(p.get_ref().clone()), p.span()),
+            (None, Some(i)) => (Scheduled::Input(i.get_ref().clone()), i.span()),
+            _ => {
+                return Err(ctx.err(
+                    entry.span(),
+                    "change: give exactly one of `parameter` or `input` (what takes the new value)"
+                        .to_string(),
+                ));
+            }
+        };
+        let (at, value) = (*c.at.get_ref(), *c.value.get_ref());
+        // Located where the fault lies: the time, the name, or the value.
+        let span = if !(at.is_finite() && at >= 0.0) {
+            c.at.span()
+        } else if g.params().contains_key(what.name()) || g.inputs().contains_key(what.name()) {
+            c.value.span()
+        } else {
+            name_span
+        };
+        g.add_scheduled(ScheduledChange {
+            at,
+            what,
+            value,
+            description: c.description.clone(),
+        })
+        .map_err(|e| ctx.err(span, format!("change: {e}")))?;
+    }
     Ok(g)
 }
 
@@ -801,6 +849,22 @@ pub fn write_model(g: &BondGraph) -> String {
             q(&text),
             q(&o.unit)
         );
+    }
+    for c in g.schedule() {
+        let field = match c.what {
+            Scheduled::Parameter(_) => "parameter",
+            Scheduled::Input(_) => "input",
+        };
+        let _ = writeln!(
+            s,
+            "\n[[changes]]\nat = {}\n{field} = {}\nvalue = {}",
+            num(c.at),
+            q(c.what.name()),
+            num(c.value)
+        );
+        if !c.description.is_empty() {
+            let _ = writeln!(s, "description = {}", q(&c.description));
+        }
     }
     for c in g.declared() {
         let el = &c.element;

@@ -18,7 +18,7 @@ use modelgap_core::recording::MAX_MAGNITUDE;
 
 use crate::element::{
     DeclaredCandidate, Element, ElementKind, InitialState, InputSignal, Law, Output, Parameter,
-    Range,
+    Range, Scheduled, ScheduledChange,
 };
 use crate::error::{BondError, Result};
 use crate::expr::Expr;
@@ -120,6 +120,8 @@ pub struct BondGraph {
     initial: BTreeMap<String, InitialState>,
     /// Effects the model file declares for explain to try.
     declared: Vec<DeclaredCandidate>,
+    /// Changes at given times (steps, abrupt faults), in time order.
+    schedule: Vec<ScheduledChange>,
 }
 
 /// Checks that `range` is finite, ordered and holds `value`.
@@ -413,6 +415,63 @@ impl BondGraph {
         check_range(&label, state.value, state.free)?;
         self.initial.insert(element.to_string(), state);
         Ok(())
+    }
+
+    /// The changes the model makes at given times (`[[changes]]`), in time
+    /// order.
+    pub fn schedule(&self) -> &[ScheduledChange] {
+        &self.schedule
+    }
+
+    /// Adds a change at a given time (kept in time order; changes at the
+    /// same time apply in the order added).
+    ///
+    /// # Errors
+    /// [`BondError::UnknownParameter`] for a parameter or input the model
+    /// does not have; [`BondError::BadRange`] for a time that is negative or
+    /// not finite, or a value that is not finite; the errors of
+    /// [`BondGraph::set_param`] for a parameter value its element cannot
+    /// have.
+    pub fn add_scheduled(&mut self, change: ScheduledChange) -> Result<()> {
+        let name = change.what.name();
+        let bad = |detail: String| BondError::BadRange {
+            name: format!("change of {name}"),
+            detail,
+        };
+        if !(change.at.is_finite() && change.at >= 0.0) {
+            return Err(bad(format!(
+                "its time must be finite and not negative (s from the start of the run), found {}",
+                change.at
+            )));
+        }
+        if !in_range(change.value) {
+            return Err(bad(format!(
+                "its value must be finite and at most {} in magnitude, found {}",
+                modelgap_core::recording::MAX_MAGNITUDE,
+                change.value
+            )));
+        }
+        match &change.what {
+            Scheduled::Parameter(p) => {
+                self.clone().set_param(p, change.value)?;
+            }
+            Scheduled::Input(i) => {
+                if !self.inputs.contains_key(i) {
+                    return Err(BondError::UnknownParameter {
+                        name: i.clone(),
+                        known: self.inputs.keys().cloned().collect::<Vec<_>>().join(", "),
+                    });
+                }
+            }
+        }
+        let pos = self.schedule.partition_point(|c| c.at <= change.at);
+        self.schedule.insert(pos, change);
+        Ok(())
+    }
+
+    /// Removes every scheduled change.
+    pub fn clear_schedule(&mut self) {
+        self.schedule.clear();
     }
 
     /// The effects the model declares for explain to try (`[[candidates]]`).

@@ -32,7 +32,7 @@ use modelgap_core::{Candidate, CoreError, Effect, Model, Prediction, Recording};
 use crate::compiled::CompiledModel;
 use crate::diagnosis::{DiagnosisOptions, diagnose};
 use crate::effects::{self, BondEffect};
-use crate::element::{ElementKind, Law};
+use crate::element::{ElementKind, Law, Scheduled, ScheduledChange};
 use crate::error::{BondError, Result};
 use crate::fault_tree::first_hypothesis_set;
 use crate::file::write_model;
@@ -181,7 +181,7 @@ impl BondModel {
             changes,
             ..SimOptions::default()
         };
-        if opts.changes.is_empty() {
+        if opts.changes.is_empty() && graph.schedule().is_empty() {
             simulate_compiled(&model, &inputs, rec.t(), &opts)
         } else {
             simulate(&graph, &inputs, rec.t(), &opts)
@@ -511,21 +511,32 @@ impl Model for BondModel {
     }
 
     /// The graph as a model file, headed by a comment line per effect built
-    /// in and per abrupt change (`# fault: R becomes 1.2 at t = 0.5 s …`);
-    /// the file itself holds no abrupt changes, only the graph.
+    /// in; the abrupt changes explain found are written as `[[changes]]`,
+    /// so a model read back from the file makes them too.
     fn to_file_text(&self) -> Option<String> {
         let mut s = String::new();
         for a in &self.added {
             let _ = writeln!(s, "# {a}");
         }
+        let mut graph = self.graph.clone();
         for c in &self.changes {
-            let _ = writeln!(
-                s,
-                "# fault: {} becomes {} at t = {} s (abrupt change found by explain)",
-                c.name, c.value, c.at
-            );
+            let change = ScheduledChange {
+                at: c.at,
+                what: Scheduled::Parameter(c.name.clone()),
+                value: c.value,
+                description: "abrupt change found by explain".to_string(),
+            };
+            if graph.add_scheduled(change).is_err() {
+                // Not a parameter of the graph (cannot happen for changes
+                // made by effects): keep it visible as a comment.
+                let _ = writeln!(
+                    s,
+                    "# fault: {} becomes {} at t = {} s (abrupt change found by explain)",
+                    c.name, c.value, c.at
+                );
+            }
         }
-        s.push_str(&write_model(&self.graph));
+        s.push_str(&write_model(&graph));
         Some(s)
     }
 

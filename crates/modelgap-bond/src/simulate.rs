@@ -15,6 +15,7 @@ use std::collections::BTreeMap;
 use modelgap_core::{Recording, Signal};
 
 use crate::compiled::CompiledModel;
+use crate::element::Scheduled;
 use crate::error::{BondError, Result};
 use crate::graph::BondGraph;
 use crate::ode::{self, Method, OdeOptions, OdeStats, OdeSystem};
@@ -540,6 +541,12 @@ fn check_events<'a>(
 /// assert!((omega[500] - 239.0438).abs() < 0.5); // close to steady state after 0.5 s
 /// ```
 pub fn simulate(g: &BondGraph, inputs: &Inputs, t_out: &[f64], opts: &SimOptions) -> Result<Run> {
+    if !g.schedule().is_empty() {
+        let (inputs, opts) = with_schedule(g, inputs, opts);
+        let mut g = g.clone();
+        g.clear_schedule();
+        return simulate(&g, &inputs, t_out, &opts);
+    }
     let model = CompiledModel::new(g)?;
     if opts.changes.is_empty() {
         return simulate_compiled(&model, inputs, t_out, opts);
@@ -614,6 +621,56 @@ pub fn simulate(g: &BondGraph, inputs: &Inputs, t_out: &[f64], opts: &SimOptions
         }
     }
     run.ok_or_else(|| BondError::BadOptions("no output times".to_string()))
+}
+
+/// The drives and options of a run of `g` with its scheduled changes
+/// ([`BondGraph::schedule`]) made: parameter changes join `opts.changes`;
+/// an input that steps gets a held drive from its default through its
+/// steps, unless `inputs` drives it already (a recording overrides the
+/// file).
+fn with_schedule(g: &BondGraph, inputs: &Inputs, opts: &SimOptions) -> (Inputs, SimOptions) {
+    let mut inputs = inputs.clone();
+    let mut opts = opts.clone();
+    let mut steps: BTreeMap<&str, Vec<(f64, f64)>> = BTreeMap::new();
+    for c in g.schedule() {
+        match &c.what {
+            Scheduled::Parameter(name) => opts.changes.push(ParamChange {
+                at: c.at,
+                name: name.clone(),
+                value: c.value,
+            }),
+            Scheduled::Input(name) => steps.entry(name).or_default().push((c.at, c.value)),
+        }
+    }
+    for (name, steps) in steps {
+        if inputs.get(name).is_some() {
+            continue;
+        }
+        let default = g.inputs().get(name).map_or(0.0, |i| i.default);
+        // Held from a sample before the run's start, then each step; steps
+        // at one time keep the last.
+        let mut t = vec![steps[0].0.min(0.0) - 1.0];
+        let mut values = vec![default];
+        for (at, v) in steps {
+            if let (Some(&last), Some(held)) = (t.last(), values.last_mut())
+                && last == at
+            {
+                *held = v;
+            } else {
+                t.push(at);
+                values.push(v);
+            }
+        }
+        inputs.set(
+            name,
+            Drive::Sampled {
+                t,
+                values,
+                hold: Hold::Zero,
+            },
+        );
+    }
+    (inputs, opts)
 }
 
 fn truncate(mut r: Run, n: usize) -> Run {
