@@ -25,6 +25,7 @@ pub use modelgap_bond::simulate::Hold;
 use modelgap_bond::{BondModel, file::read_model_path, library};
 use modelgap_cloth::model::ClothModel;
 use modelgap_cloth::scenes::{self, Scene};
+use modelgap_core::io::csv::CsvOptions;
 use modelgap_core::{Model, Recording};
 
 use crate::{Error, Result};
@@ -271,6 +272,42 @@ fn load_cloth(path_or_name: &str, opts: &LoadOptions) -> Result<ClothModel> {
 /// [`Error::Input`] for a directory or a missing file; the reader's errors, which name the
 /// file and the line, field or message.
 pub fn load_recording(path: &Path, model: &dyn Model) -> Result<Recording> {
+    check_recording_path(path)?;
+    Ok(model.read_recording(path)?)
+}
+
+/// Reads a recording for `model` as [`load_recording`] does, a bond graph's CSV signals with
+/// `csv` (the time column, separator and decimal mark; see
+/// [`modelgap_core::io::csv`]); returns it with the reader's notes (an index column left
+/// out, a unit row read, a time unit converted, a separator or decimal mark detected).
+///
+/// # Errors
+/// As [`load_recording`]; [`Error::Input`] for CSV options other than the defaults with a
+/// cloth scene, whose marker files (`t,id,x,y,z`) are read as written, and
+/// [`modelgap_core::CoreError::InvalidArgument`] with an MCAP file.
+pub fn load_recording_with(
+    path: &Path,
+    model: &AnyModel,
+    csv: &CsvOptions,
+) -> Result<(Recording, Vec<String>)> {
+    check_recording_path(path)?;
+    match model {
+        AnyModel::BondGraph(_) => Ok(modelgap_core::io::read_recording_path_with(path, csv)?),
+        AnyModel::ClothScene(m) => {
+            if !csv.is_default() {
+                return Err(Error::Input(
+                    "--time, --delimiter and --decimal-comma apply to signal recordings; a cloth \
+                     scene reads marker files (`t,id,x,y,z`) as they are written"
+                        .to_owned(),
+                ));
+            }
+            Ok((m.read_recording(path)?, Vec::new()))
+        }
+    }
+}
+
+/// Refuses a recording path that is a directory or does not exist.
+fn check_recording_path(path: &Path) -> Result<()> {
     if path.is_dir() {
         return Err(Error::Input(format!(
             "{} is a directory: give a recording file (.csv or .mcap)",
@@ -283,5 +320,5 @@ pub fn load_recording(path: &Path, model: &dyn Model) -> Result<Recording> {
             path.display()
         )));
     }
-    Ok(model.read_recording(path)?)
+    Ok(())
 }

@@ -98,10 +98,40 @@ impl PyRecording {
     }
 
     /// Reads a ``.csv`` file, or the ``/signals`` topic of an ``.mcap`` file.
+    ///
+    /// CSV files as pandas, R or a spreadsheet export them read as they are: quoted cells, a
+    /// row-index first column (left out), the time column ``t`` or ``time`` anywhere (with a
+    /// unit such as ``time [ms]``, converted to seconds), ``;`` or tabs with decimal commas,
+    /// ``name [unit]`` headers or a unit row. ``time`` names another time column,
+    /// ``delimiter`` (one character) and ``decimal_comma`` declare what detection cannot
+    /// tell; none of them applies to an ``.mcap`` file.
     #[staticmethod]
-    fn load(py: Python<'_>, path: PathBuf) -> PyResult<PyRecording> {
-        let rec = detached(py, move || modelgap::io::read_recording_path(&path))?;
-        Ok(rec.map_err(to_py_err)?.into())
+    #[pyo3(signature = (path, *, time = None, delimiter = None, decimal_comma = None))]
+    fn load(
+        py: Python<'_>,
+        path: PathBuf,
+        time: Option<String>,
+        delimiter: Option<String>,
+        decimal_comma: Option<bool>,
+    ) -> PyResult<PyRecording> {
+        let delimiter = match delimiter.as_deref() {
+            None => None,
+            Some(d) if d.len() == 1 && d.is_ascii() => Some(d.as_bytes()[0]),
+            Some(d) => {
+                return Err(data_error(format!(
+                    "delimiter must be one character, such as \";\" or \"\\t\", found {d:?}"
+                )));
+            }
+        };
+        let options = modelgap::io::csv::CsvOptions {
+            time,
+            delimiter,
+            decimal_comma,
+        };
+        let read = detached(py, move || {
+            modelgap::io::read_recording_path_with(&path, &options)
+        })?;
+        Ok(read.map_err(to_py_err)?.0.into())
     }
 
     /// Writes the recording as ``.csv`` or ``.mcap`` (chosen by the extension).

@@ -94,6 +94,26 @@ def test_file_errors_name_the_file(tmp_path: Path):
         Recording.load(tmp_path / "missing.csv")
 
 
+def test_exports_of_other_tools_load_and_time_names_the_column(tmp_path: Path):
+    # Issue 16: pandas' `to_csv()` (an unnamed index column) and a spreadsheet's `;` with
+    # decimal commas read as they are; `time=` names a time column that is not `t`.
+    pandas = tmp_path / "pandas.csv"
+    pandas.write_text(",t,u [V],y\n0,0.0,1.0,0.5\n1,0.001,1.0,0.25\n")
+    rec = Recording.load(pandas)
+    assert rec.names == ["u", "y"]
+    np.testing.assert_array_equal(rec.t, [0.0, 0.001])
+    sheet = tmp_path / "sheet.csv"
+    sheet.write_text("Zeit [s];u [V]\n0;1,5\n0,001;2,25\n")
+    with pytest.raises(DataError, match=r"its columns are `Zeit \[s\]`, `u \[V\]`.*--time COL"):
+        Recording.load(sheet)
+    rec = Recording.load(sheet, time="Zeit")
+    np.testing.assert_array_equal(rec.signal("u"), [1.5, 2.25])
+    rec = Recording.load(sheet, time="Zeit", delimiter=";", decimal_comma=True)
+    np.testing.assert_array_equal(rec.t, [0.0, 0.001])
+    with pytest.raises(DataError, match="delimiter must be one character"):
+        Recording.load(sheet, delimiter=";;")
+
+
 def test_pickle_round_trip(signals):
     rec = Recording(*signals)
     back = pickle.loads(pickle.dumps(rec))

@@ -7,7 +7,7 @@ use clap::Args;
 use modelgap::bond::arr::{arr_residuals, derive_arrs};
 use modelgap::bond::{Equations, assign_causality};
 
-use super::model::{ModelArgs, load, read_recording_arg};
+use super::model::{CsvArgs, ModelArgs, load, read_recording_arg_with};
 
 /// Arguments of `modelgap bond arr`.
 #[derive(Debug, Args)]
@@ -18,6 +18,9 @@ pub struct ArrArgs {
     /// A recording (CSV or MCAP) to evaluate the ARRs on: prints each ARR's RMS and largest value
     #[arg(long, value_name = "FILE")]
     data: Option<std::path::PathBuf>,
+
+    #[command(flatten)]
+    csv: CsvArgs,
 }
 
 /// Prints the ARRs and the fault signature matrix.
@@ -35,7 +38,7 @@ pub fn run(args: &ArrArgs) -> anyhow::Result<()> {
         derive_arrs(&g, &eqs).with_context(|| format!("deriving the ARRs of model {}", g.name))?;
     let mut out = analysis.to_text();
     if let Some(path) = &args.data {
-        let rec = read_recording_arg("--data", "recording", path)?;
+        let rec = read_recording_arg_with("--data", "recording", path, &args.csv)?;
         let residuals = arr_residuals(&analysis.arrs, &rec)
             .with_context(|| format!("evaluating the ARRs on {}", path.display()))?;
         out.push_str(&format!("\nARR residuals on {}:\n", path.display()));

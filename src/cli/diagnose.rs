@@ -12,7 +12,9 @@ use modelgap::bond::fault_tree::Hypothesis;
 use modelgap::residual::stats;
 use serde_json::{Value, json};
 
-use super::model::{ModelArgs, load, parse_count, parse_number, read_recording_arg, steady_state};
+use super::model::{
+    CsvArgs, ModelArgs, load, parse_count, parse_number, read_recording_arg_with, steady_state,
+};
 
 /// Arguments of `modelgap bond diagnose`.
 #[derive(Debug, Args)]
@@ -23,6 +25,9 @@ pub struct DiagnoseArgs {
     /// The recording to diagnose (.csv or .mcap): the model's inputs and some of its outputs
     #[arg(long, value_name = "FILE")]
     data: PathBuf,
+
+    #[command(flatten)]
+    csv: CsvArgs,
 
     /// The band a residual must leave: fraction:F (of the nominal output's steady state),
     /// noise:K (K noise standard deviations of the measurement) or abs:B (in the output's
@@ -71,7 +76,7 @@ pub fn parse_threshold(text: &str) -> Result<Threshold, String> {
 pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
     let g = load(&args.model)?;
     let path = &args.data;
-    let rec = read_recording_arg("--data", "recording", path)?;
+    let rec = read_recording_arg_with("--data", "recording", path, &args.csv)?;
     let mut opts = DiagnosisOptions {
         threshold: args.threshold,
         persistence: args.persistence,

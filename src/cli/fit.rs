@@ -12,7 +12,7 @@ use modelgap::{CalibrationOptions, LoadOptions};
 use serde_json::json;
 
 use super::BadInput;
-use super::model::ModelArgs;
+use super::model::{CsvArgs, ModelArgs};
 use super::report::{HoldArg, check_fit, json_text};
 
 /// Arguments of `modelgap fit`.
@@ -24,6 +24,9 @@ pub struct FitArgs {
     /// The recording (.csv or .mcap): the model's inputs and some of its outputs
     #[arg(long, value_name = "FILE")]
     pub data: PathBuf,
+
+    #[command(flatten)]
+    pub csv: CsvArgs,
 
     /// Also fit this parameter, within LO:HI (default: from 0 to 1000 times its value, its
     /// sign kept) (repeatable)
@@ -103,7 +106,7 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
             .collect(),
         ..args.model.load_options(args.steady_start, args.hold.into())
     };
-    let model = modelgap::load_model(&args.model.model, &opts)
+    let model = modelgap::load::load(&args.model.model, &opts)
         .with_context(|| format!("loading model {}", args.model.model))?;
     let model_file = std::path::Path::new(&args.model.model)
         .is_file()
@@ -111,9 +114,16 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
     if let Some(out) = &args.out {
         super::fix::check_out(out, model_file.as_deref())?;
     }
-    let rec = modelgap::load_recording(&args.data, model.as_ref())?;
+    let (rec, mut notes) =
+        modelgap::load::load_recording_with(&args.data, &model, &args.csv.options())?;
+    let model = model.into_model();
     let label = args.data.display().to_string();
-    let notes = check_fit(model.as_ref(), &rec, &Default::default(), &label)?;
+    notes.extend(check_fit(
+        model.as_ref(),
+        &rec,
+        &Default::default(),
+        &label,
+    )?);
     if model.free_parameters().is_none() {
         return Err(BadInput(format!(
             "model {} has nothing to calibrate: mark parameters `free = true` in its file, or \
@@ -198,10 +208,15 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
     }
     match &args.out {
         Some(p) => out.push_str(&format!(
-            "wrote {}\nnext: `modelgap explain --model {} --data {}` names what is still missing\n",
+            "wrote {}\nnext: `modelgap explain --model {} --data {}{}` names what is still missing\n",
             p.display(),
             p.display(),
-            args.data.display()
+            args.data.display(),
+            args.csv
+                .to_args()
+                .iter()
+                .map(|a| format!(" {a}"))
+                .collect::<String>()
         )),
         None => out.push_str("(no --out: nothing written)\n"),
     }

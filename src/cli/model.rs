@@ -11,7 +11,8 @@ use modelgap::bond::BondGraph;
 use modelgap::bond::compiled::CompiledModel;
 use modelgap::bond::file::read_model_path;
 use modelgap::bond::library::{self, BUILTINS};
-use modelgap::io::read_recording_path;
+use modelgap::io::csv::CsvOptions;
+use modelgap::io::read_recording_path_with;
 use modelgap::{LoadOptions, Recording};
 
 use super::BadInput;
@@ -39,6 +40,77 @@ impl ModelArgs {
             hold,
             free: Vec::new(),
         }
+    }
+}
+
+/// How a CSV recording is read: files as other tools export them (pandas, R, spreadsheets)
+/// mostly read as they are; these say what cannot be detected.
+#[derive(Debug, Default, Args)]
+pub struct CsvArgs {
+    /// CSV recordings: the time column, named as in the header, with or without its unit
+    /// (default: the column `t`, else the one named `t` or `time` in any case, with any unit)
+    #[arg(long = "time", value_name = "COL")]
+    pub time: Option<String>,
+
+    /// CSV recordings: the cell separator, such as `;` or `tab` (default: `,`, or `;` or a tab
+    /// when the header has one and no `,`)
+    #[arg(long, value_name = "SEP", value_parser = parse_delimiter)]
+    pub delimiter: Option<u8>,
+
+    /// CSV recordings: numbers are written with a decimal comma, 1,5 for 1.5 (default:
+    /// detected when cells are separated by `;` or tabs)
+    #[arg(long)]
+    pub decimal_comma: bool,
+}
+
+impl CsvArgs {
+    /// The reader's options.
+    pub fn options(&self) -> CsvOptions {
+        CsvOptions {
+            time: self.time.clone(),
+            delimiter: self.delimiter,
+            decimal_comma: self.decimal_comma.then_some(true),
+        }
+    }
+
+    /// The options as they would be typed again, for the "next:" hints.
+    pub fn to_args(&self) -> Vec<String> {
+        let quote = |t: &str| {
+            if t.is_empty()
+                || t.contains(|c: char| !(c.is_ascii_alphanumeric() || "_.-".contains(c)))
+            {
+                format!("'{}'", t.replace('\'', "'\\''"))
+            } else {
+                t.to_owned()
+            }
+        };
+        let mut args = Vec::new();
+        if let Some(time) = &self.time {
+            args.push(format!("--time {}", quote(time)));
+        }
+        if let Some(d) = self.delimiter {
+            let sep = if d == b'\t' {
+                "tab".to_owned()
+            } else {
+                quote(&char::from(d).to_string())
+            };
+            args.push(format!("--delimiter {sep}"));
+        }
+        if self.decimal_comma {
+            args.push("--decimal-comma".to_owned());
+        }
+        args
+    }
+}
+
+/// Parses `--delimiter`: one ASCII character, or `tab`.
+fn parse_delimiter(text: &str) -> Result<u8, String> {
+    match text {
+        "tab" | "\\t" | "\t" => Ok(b'\t'),
+        _ if text.len() == 1 && text.is_ascii() => Ok(text.as_bytes()[0]),
+        _ => Err(format!(
+            "expected one character, such as `;` or `,`, or `tab`; found `{text}`"
+        )),
     }
 }
 
@@ -171,6 +243,22 @@ pub fn check_report_dir(option: &str, dir: &Path) -> anyhow::Result<()> {
 /// [`BadInput`] for a path that does not exist or is a directory; the reader's errors (with
 /// the line and column) under the context `reading <what> <path>`.
 pub fn read_recording_arg(option: &str, what: &str, path: &Path) -> anyhow::Result<Recording> {
+    read_recording_arg_with(option, what, path, &CsvArgs::default())
+}
+
+/// Reads the recording an option names, as [`read_recording_arg`] does, a CSV file with the
+/// `--time`, `--delimiter` and `--decimal-comma` given; the reader's notes (an index column
+/// left out, a unit row read) go to standard error.
+///
+/// # Errors
+///
+/// As [`read_recording_arg`].
+pub fn read_recording_arg_with(
+    option: &str,
+    what: &str,
+    path: &Path,
+    csv: &CsvArgs,
+) -> anyhow::Result<Recording> {
     if path.is_dir() {
         return Err(BadInput(format!(
             "{option} {} is a directory: give a recording file (.csv or .mcap)",
@@ -185,7 +273,10 @@ pub fn read_recording_arg(option: &str, what: &str, path: &Path) -> anyhow::Resu
         ))
         .into());
     }
-    read_recording_path(path).with_context(|| format!("reading {what} {}", path.display()))
+    let (rec, notes) = read_recording_path_with(path, &csv.options())
+        .with_context(|| format!("reading {what} {}", path.display()))?;
+    super::report::print_notes(&notes);
+    Ok(rec)
 }
 
 /// The built-in model names, comma-separated.

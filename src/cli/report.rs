@@ -23,12 +23,13 @@ pub use modelgap::story::ReportParts;
 use modelgap::story::Story;
 use modelgap::{
     CompareOptions, Comparison, ExplainOptions, Explanation, Model, Recording, compare, explain,
-    load_model, load_recording,
 };
 use serde_json::Value;
 
 use super::BadInput;
-use super::model::{Assignment, ModelArgs, check_report_dir, parse_assignment, parse_positive};
+use super::model::{
+    Assignment, CsvArgs, ModelArgs, check_report_dir, parse_assignment, parse_positive,
+};
 
 /// The arguments every loop command takes: the model, the recording and how to hold one
 /// against the other.
@@ -40,6 +41,9 @@ pub struct LoopArgs {
     /// The recording (.csv or .mcap): the model's inputs and some of its outputs
     #[arg(long, value_name = "FILE")]
     pub data: PathBuf,
+
+    #[command(flatten)]
+    pub csv: CsvArgs,
 
     /// Start the model at its steady state under the recording's first input values
     /// (default: at rest)
@@ -206,7 +210,7 @@ impl Loaded {
 /// the model does not predict; model and recording read errors, with the file in the context.
 pub fn load_loop(args: &LoopArgs) -> anyhow::Result<Loaded> {
     let opts = args.model.load_options(args.steady_start, args.hold.into());
-    let model = load_model(&args.model.model, &opts).map_err(|e| match e {
+    let model = modelgap::load::load(&args.model.model, &opts).map_err(|e| match e {
         // "setting L = 0" says which --set already.
         modelgap::Error::Set { .. } => anyhow::Error::new(e),
         _ => anyhow::Error::new(e).context(format!("loading model {}", args.model.model)),
@@ -228,14 +232,20 @@ pub fn load_loop(args: &LoopArgs) -> anyhow::Result<Loaded> {
     if !path.exists() {
         return Err(BadInput(format!("--data: recording {} not found", path.display())).into());
     }
-    let rec = load_recording(path, model.as_ref())
+    let (rec, mut notes) = modelgap::load::load_recording_with(path, &model, &args.csv.options())
         .with_context(|| format!("reading recording {}", path.display()))?;
+    let model = model.into_model();
     let noise: BTreeMap<String, f64> = args
         .noise
         .iter()
         .map(|a| (a.name.clone(), a.value))
         .collect();
-    let notes = check_fit(model.as_ref(), &rec, &noise, &path.display().to_string())?;
+    notes.extend(check_fit(
+        model.as_ref(),
+        &rec,
+        &noise,
+        &path.display().to_string(),
+    )?);
     Ok(Loaded {
         model,
         model_file,
@@ -333,6 +343,7 @@ pub fn args_text_with_model(args: &LoopArgs, model: Option<&Path>) -> String {
         "--data {}",
         quote(&args.data.display().to_string())
     ));
+    parts.extend(args.csv.to_args());
     if args.steady_start {
         parts.push("--steady-start".to_owned());
     }

@@ -53,6 +53,42 @@ fn pandas_to_csv_index_column_is_left_out_with_a_note() {
 }
 
 #[test]
+fn pandas_exports_read_as_pandas_writes_them() {
+    // Verbatim from pandas 2 (`df.to_csv(...)` on a frame with columns `t`, `u [V]`, `y`).
+    let t = [0.0, 0.001, 0.002, 0.003, 0.004];
+    let u = [1.0, 1.0, 1.5, 1e-5, 2.0];
+    let y = [0.5, 0.25, 1.0 / 3.0, 2.0, 1e-7];
+    let default = ",t,u [V],y\n0,0.0,1.0,0.5\n1,0.001,1.0,0.25\n2,0.002,1.5,0.3333333333333333\n\
+                   3,0.003,1e-05,2.0\n4,0.004,2.0,1e-07\n";
+    // `sep=";", decimal=",", index=False`
+    let german = "t;u [V];y\n0,0;1,0;0,5\n0,001;1,0;0,25\n0,002;1,5;0,3333333333333333\n\
+                  0,003;1e-05;2,0\n0,004;2,0;1e-07\n";
+    // `decimal=","` with the default `,`: the numbers quoted.
+    let quoted = ",t,u [V],y\n0,\"0,0\",\"1,0\",\"0,5\"\n1,\"0,001\",\"1,0\",\"0,25\"\n\
+                  2,\"0,002\",\"1,5\",\"0,3333333333333333\"\n3,\"0,003\",1e-05,\"2,0\"\n\
+                  4,\"0,004\",\"2,0\",1e-07\n";
+    for (name, text, options) in [
+        ("default", default, CsvOptions::default()),
+        ("german", german, CsvOptions::default()),
+        ("quoted", quoted, CsvOptions::default().decimal_comma(true)),
+    ] {
+        let read = read_with(text, &options);
+        let rec = &read.recording;
+        assert_eq!(rec.t(), &t, "{name}");
+        assert_eq!(rec.values("u").ok(), Some(&u[..]), "{name}");
+        assert_eq!(rec.values("y").ok(), Some(&y[..]), "{name}");
+        assert_eq!(read.unit("u"), Some("V"), "{name}");
+    }
+    // Without the declaration, the quoted decimal commas are refused.
+    let e = refuse(quoted);
+    assert!(matches!(e, CoreError::DecimalMark { line: 2, .. }), "{e}");
+    // `df.reset_index().to_csv()`: the unnamed row index is left out, `index` kept.
+    let reset = ",index,t,u [V],y\n0,0,0.0,1.0,0.5\n1,1,0.001,1.0,0.25\n";
+    let read = read(reset);
+    assert_eq!(read.recording.names(), vec!["index", "u", "y"]);
+}
+
+#[test]
 fn pandas_index_named_or_written_back_is_left_out() {
     for first in ["index", "Unnamed: 0"] {
         let read = read(&format!(

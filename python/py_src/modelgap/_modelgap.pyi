@@ -140,21 +140,40 @@ class Recording:
         """
 
     @staticmethod
-    def load(path: _Path) -> Recording:
+    def load(
+        path: _Path,
+        *,
+        time: Optional[str] = None,
+        delimiter: Optional[str] = None,
+        decimal_comma: Optional[bool] = None,
+    ) -> Recording:
         """Reads a recording from a ``.csv`` file or the ``/signals`` topic of an ``.mcap`` file.
 
-        A CSV file has a header ``t,<name>,<name>,...`` and one row per sample; lines starting
-        with ``#`` are comments. The GIL is released while reading.
+        A CSV file has a header naming the columns and one row per sample; lines starting with
+        ``#`` are comments. Files as pandas, R or a spreadsheet export them read as they are:
+        quoted cells; a first column of row numbers (pandas' unnamed index, R's row names) is
+        left out; the time column is ``t``, else the one named ``t`` or ``time`` in any case,
+        anywhere in the header, with or without a unit (``time [ms]`` is converted to
+        seconds); ``;`` or tabs between cells are detected, and with them decimal commas
+        (``1,5``); ``name [unit]`` headers and a unit row under the header give units. The GIL
+        is released while reading.
 
         Args:
             path: The file; its extension (``.csv`` or ``.mcap``) chooses the format.
+            time: CSV: the time column, named as in the header, with or without its unit.
+            delimiter: CSV: the one character between cells (``";"``, ``"\\t"``) instead of
+                detecting it.
+            decimal_comma: CSV: whether numbers are written ``1,5``; needed for quoted
+                decimal commas between ``,`` cells, detected with ``;`` or tabs.
 
         Returns:
             The recording.
 
         Raises:
-            DataError: For a file that cannot be read, an unknown extension, or bad content
-                (naming the line and column, or the MCAP message).
+            DataError: For a file that cannot be read, an unknown extension, bad content
+                (naming the line and column, or the MCAP message), a time column that is
+                missing (the message lists the columns) or ambiguous, or CSV options with an
+                ``.mcap`` file.
         """
 
     def save(self, path: _Path) -> None:
