@@ -208,10 +208,12 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
     }
     match &args.out {
         Some(p) => out.push_str(&format!(
-            "wrote {}\nnext: `modelgap explain --model {} --data {}{}` names what is still missing\n",
+            "wrote {}\nnext: `modelgap explain --model {} --data {}{}{}{}` names what is still missing\n",
             p.display(),
             p.display(),
             args.data.display(),
+            if args.steady_start { " --steady-start" } else { "" },
+            if args.hold == HoldArg::Linear { " --hold linear" } else { "" },
             args.csv
                 .to_args()
                 .iter()

@@ -9,8 +9,9 @@ use super::problem::{Cancel, ResidualProblem};
 use super::report::{FitReport, Termination, uncertainty};
 
 /// The default finite-difference step, relative to each parameter's scale (an absolute
-/// step of `DEFAULT_FD_STEP × scale`).
-pub const DEFAULT_FD_STEP: f64 = 1e-6;
+/// step of `DEFAULT_FD_STEP × scale`): √(10⁻⁸), for residuals that come from adaptive
+/// simulations at a relative tolerance of 10⁻⁸ (see the [module docs](super)).
+pub const DEFAULT_FD_STEP: f64 = 1e-4;
 
 /// Nielsen's initial damping, relative to the largest diagonal entry of JᵀJ (τ in Madsen,
 /// Nielsen & Tingleff 2004, who suggest 10⁻⁶…1; 10⁻³ suits starts that are not close).

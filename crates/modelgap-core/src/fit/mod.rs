@@ -68,7 +68,11 @@
 //!   the caller's `scales`), so the damping term μ‖Δz‖² treats all parameters alike and
 //!   the step tolerance `xtol` reads in units of each parameter's scale.
 //! - **Jacobian.** Forward differences with absolute steps: `FitOptions::fd_steps`, by
-//!   default 10⁻⁶ × scale. Near the upper bound the step flips to a backward difference;
+//!   default 10⁻⁴ × scale: about the square root of the simulations' relative error (their
+//!   adaptive solvers run at rtol 10⁻⁸), the step that balances truncation against the
+//!   solver's noise. At 10⁻⁶ a weak term (a cubic spring b·q³ beside a·q on the Silverbox)
+//!   changed the output by less than the solver's error, its column was noise, and a fit
+//!   left b where it started. Near the upper bound the step flips to a backward difference;
 //!   if the residuals fail at the difference point the other side is tried, and a column
 //!   that cannot be formed is zero (the parameter does not move in that iteration).
 //!   Evaluations run serially: callers parallelise across fits.
