@@ -86,7 +86,10 @@ fn silverbox_cubic_spring_is_found_and_cuts_the_validation_error_threefold() {
         &arrow,
         &["stiffness@k", "coulomb@1m", "fault:a", "inertia@1m"],
     );
-    assert!((3.0..4.5).contains(&k3), "k3 = {k3} (scipy on the whole record: 3.95)");
+    assert!(
+        (3.0..4.5).contains(&k3),
+        "k3 = {k3} (scipy on the whole record: 3.95)"
+    );
     assert!(
         rms <= linear_rms / 3.0,
         "arrow RMS: calibrated linear {linear_rms} → with the cubic stiffness {rms}"
@@ -136,7 +139,11 @@ fn buck_converter_calibrates_and_its_quantisation_is_recognised() {
         let vo = c.output("Vo").unwrap();
         let q = vo.quantum.expect("the 0.2 V steps are recognised");
         assert!((q - 0.2).abs() < 1e-9, "quantum {q}");
-        assert!(vo.noise_floor >= 0.999 * 0.2 / 12f64.sqrt(), "{}", vo.noise_floor);
+        assert!(
+            vo.noise_floor >= 0.999 * 0.2 / 12f64.sqrt(),
+            "{}",
+            vo.noise_floor
+        );
     }
     let ex = explain(cal.model.as_ref(), &est, &ExplainOptions::default()).unwrap();
     assert!(
