@@ -432,3 +432,30 @@ fn declared_candidates_round_trip_and_bad_ones_name_the_line() {
         assert!(message.contains("line "), "{to}: {message}");
     }
 }
+
+/// A declared domain gives the domain's physics but not SI units the model does not use:
+/// the real tanks' levels are a sensor's volts, so the overflow level is in the node's
+/// effort unit `e`, not in Pa; a tank whose C is in m^3/Pa keeps Pa.
+#[test]
+fn a_declared_domain_does_not_claim_units_the_model_lacks() {
+    use modelgap::Model as _;
+    let tanks = include_str!("../examples/models/cascaded-tanks.toml");
+    let unit_of = |text: &str| {
+        let model = BondModel::new(read_model(text).unwrap());
+        let c = (model.candidates().into_iter())
+            .find(|c| c.id == "overflow@top")
+            .expect("an overflow is offered on tank 1");
+        c.params[0].unit.clone()
+    };
+    assert_eq!(unit_of(tanks), "e");
+    let with_units = tanks.replace(
+        "name = \"Tank1\"\nkind = \"C\"\neffort = \"q\"",
+        "name = \"Tank1\"\nkind = \"C\"\nparameter = \"A1\"",
+    );
+    assert_ne!(with_units, tanks);
+    let with_units = with_units.replace(
+        "[inputs]",
+        "A1 = { value = 1.0, unit = \"m^3/Pa\" }\n\n[inputs]",
+    );
+    assert_eq!(unit_of(&with_units), "Pa");
+}

@@ -43,6 +43,9 @@ impl Node {
     /// `f` for a generic node. A hydraulic node whose C is an area (m^2)
     /// holds a level in m; otherwise a pressure in Pa.
     pub fn units(self) -> (&'static str, &'static str) {
+        if !self.units_known {
+            return ("e", "f");
+        }
         match self.kind {
             NodeKind::Hydraulic if self.level => ("m", "m^3/s"),
             NodeKind::Hydraulic => ("Pa", "m^3/s"),
@@ -69,6 +72,10 @@ pub struct Node {
     pub kind: NodeKind,
     /// True when its C is an area (m^2): the effort is a level.
     pub level: bool,
+    /// False when the domain is declared but the C's unit does not say the
+    /// effort's unit (a tank whose level is read in a sensor's volts): the
+    /// domain's physics apply, its SI units are not claimed.
+    pub units_known: bool,
 }
 
 impl Node {
@@ -80,6 +87,17 @@ impl Node {
         let c = (g.ports(id).into_iter())
             .map(|(b, _)| g.other_end(b, id))
             .find(|&o| g.element(o).kind == ElementKind::C)?;
+        let unit = match &g.element(c).law {
+            Law::Linear(e) => (e.params().iter())
+                .filter_map(|n| g.params().get(n))
+                .map(|p| p.unit.clone())
+                .find(|u| !u.trim().is_empty())
+                .unwrap_or_default(),
+            _ => String::new(),
+        };
+        let compact: String = unit.chars().filter(|c| !c.is_whitespace()).collect();
+        let level = matches!(compact.as_str(), "m^2" | "m²");
+        let of_unit = NodeKind::of_unit(&unit);
         if let Some(d) = g.element(id).domain {
             use crate::element::PhysicalDomain as D;
             let kind = match d {
@@ -91,22 +109,15 @@ impl Node {
             return Some(Node {
                 id,
                 kind,
-                level: false,
+                level: level && kind == NodeKind::Hydraulic,
+                units_known: of_unit == kind,
             });
         }
-        let unit = match &g.element(c).law {
-            Law::Linear(e) => (e.params().iter())
-                .filter_map(|n| g.params().get(n))
-                .map(|p| p.unit.clone())
-                .find(|u| !u.trim().is_empty())
-                .unwrap_or_default(),
-            _ => String::new(),
-        };
-        let compact: String = unit.chars().filter(|c| !c.is_whitespace()).collect();
         Some(Node {
             id,
-            kind: NodeKind::of_unit(&unit),
-            level: matches!(compact.as_str(), "m^2" | "m²"),
+            kind: of_unit,
+            level,
+            units_known: true,
         })
     }
 
