@@ -9,6 +9,8 @@
 
 pub mod atomic;
 pub mod csv;
+pub mod foxglove;
+pub mod json_schema;
 pub mod mcap;
 
 use std::path::Path;

@@ -7,6 +7,7 @@ use std::path::Path;
 
 use super::format::describe;
 use crate::error::{CoreError, Result};
+use crate::io::foxglove::round_to;
 use crate::io::mcap::{McapCompression, McapWriter, number_object_schema};
 
 /// Topic of the measured outputs.
@@ -45,6 +46,9 @@ pub struct ComparisonChannels<'a> {
 /// Each message is a flat object with one number per output (`{"i": 1.25, "omega": 98.1}`)
 /// and its `log_time` is the sample time, so Foxglove's Plot panel shows
 /// `/measured.i`, `/model.i` and `/model_after.i` side by side on the recording's time axis.
+/// The measured values are written as given; the model's and the residuals are rounded to
+/// [`KEPT_DIGITS`] (7) significant digits of each output's full scale (its largest |value|),
+/// 1e-7 of full scale, which keeps the files small.
 /// Every topic reads back with [`crate::io::mcap::read_signals`] (whose times start at the
 /// first message, so they equal `t` when `t` starts at 0).
 ///
@@ -78,14 +82,24 @@ pub struct ComparisonChannels<'a> {
 /// ```
 pub fn write_comparison<W: Write + Seek>(c: &ComparisonChannels<'_>, writer: W) -> Result<W> {
     validate(c)?;
-    let residual = difference(c.measured, c.before);
-    let residual_after = c.after.map(|after| difference(c.measured, after));
+    let decimals = kept_decimals(c);
+    let rounded = |columns: &[Vec<f64>]| -> Vec<Vec<f64>> {
+        columns
+            .iter()
+            .zip(&decimals)
+            .map(|(column, &d)| column.iter().map(|&v| round_to(v, d)).collect())
+            .collect()
+    };
+    let residual = rounded(&difference(c.measured, c.before));
+    let residual_after = c.after.map(|after| rounded(&difference(c.measured, after)));
+    let before = rounded(c.before);
+    let after = c.after.map(rounded);
 
     let mut streams: Vec<(&str, &str, &[Vec<f64>])> = vec![
         (MEASURED_TOPIC, "modelgap.Measured", c.measured),
-        (MODEL_TOPIC, "modelgap.Model", c.before),
+        (MODEL_TOPIC, "modelgap.Model", &before),
     ];
-    if let Some(after) = c.after {
+    if let Some(after) = &after {
         streams.push((MODEL_AFTER_TOPIC, "modelgap.ModelAfter", after));
     }
     streams.push((RESIDUAL_TOPIC, "modelgap.Residual", &residual));
@@ -127,6 +141,31 @@ pub fn write_comparison_mcap(c: &ComparisonChannels<'_>, path: &Path) -> Result<
     let file = AtomicFile::create(path)?;
     let w = write_comparison(c, BufWriter::new(file)).map_err(|e| e.with_path(path))?;
     commit_buffered(w)
+}
+
+/// Significant digits kept of each output's full scale in the model and residual topics.
+pub const KEPT_DIGITS: i32 = 7;
+
+/// Per output, the decimals that keep [`KEPT_DIGITS`] digits of its full scale (the largest
+/// |value| measured or predicted): 1e-7 of full scale, far finer than any sensor (a 16-bit
+/// converter resolves 1.5e-5) and than the recordings' own digits.
+fn kept_decimals(c: &ComparisonChannels<'_>) -> Vec<u8> {
+    (0..c.names.len())
+        .map(|k| {
+            let columns = [Some(c.measured), Some(c.before), c.after];
+            let scale = columns
+                .iter()
+                .flatten()
+                .flat_map(|cols| cols[k].iter())
+                .fold(0.0_f64, |m, v| m.max(v.abs()));
+            if scale > 0.0 {
+                let d = KEPT_DIGITS - 1 - scale.log10().floor() as i32;
+                d.clamp(0, 15) as u8
+            } else {
+                15
+            }
+        })
+        .collect()
 }
 
 fn difference(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<Vec<f64>> {

@@ -396,15 +396,34 @@ fn comparison_mcap_round_trips_residual_at_sample_times() {
         // Log times are whole nanoseconds.
         approx::assert_abs_diff_eq!(*back, ti, epsilon = 1e-9);
     }
+    // Model and residuals keep 7 significant digits of each output's full scale.
+    let full_scale = |k: usize| {
+        [&measured[k], &before[k], &after[k]]
+            .iter()
+            .flat_map(|c| c.iter())
+            .fold(0.0_f64, |m, v| m.max(v.abs()))
+    };
     for (k, name) in names.iter().enumerate() {
         let expected = residual_of(&measured[k], &before[k]);
-        // float_roundtrip JSON: the exact f64 comes back.
-        assert_eq!(residual.values(name).unwrap(), expected.as_slice());
+        let quantum = 10f64.powi(full_scale(k).log10().floor() as i32 - 6);
+        for (back, want) in residual.values(name).unwrap().iter().zip(&expected) {
+            approx::assert_abs_diff_eq!(*back, *want, epsilon = 0.5 * quantum * (1.0 + 1e-9));
+        }
     }
     let model_after = read_signals(&bytes, MODEL_AFTER_TOPIC).unwrap();
-    assert_eq!(model_after.values("omega").unwrap(), after[1].as_slice());
+    let quantum = 10f64.powi(full_scale(1).log10().floor() as i32 - 6);
+    for (back, want) in model_after.values("omega").unwrap().iter().zip(&after[1]) {
+        approx::assert_abs_diff_eq!(*back, *want, epsilon = 0.5 * quantum * (1.0 + 1e-9));
+    }
+    // The measured values, data, come back exactly (float_roundtrip JSON).
     let measured_back = read_signals(&bytes, MEASURED_TOPIC).unwrap();
     assert_eq!(measured_back.values("i").unwrap(), measured[0].as_slice());
+    // Every message is what its schema says.
+    let checked =
+        crate::io::mcap::check_messages(&bytes, crate::io::json_schema::Strictness::Complete)
+            .unwrap();
+    assert_eq!(checked.len(), 5);
+    assert!(checked.iter().all(|c| c.messages == t.len()));
     assert!(read_signals(&bytes, MODEL_TOPIC).is_ok());
     assert!(read_signals(&bytes, RESIDUAL_AFTER_TOPIC).is_ok());
 

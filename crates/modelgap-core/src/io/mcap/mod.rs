@@ -33,9 +33,11 @@ use serde::de::{Deserialize, Deserializer, MapAccess, Visitor};
 use crate::error::{CoreError, Location, Result};
 use crate::recording::{Recording, Signal};
 
+mod check;
 mod topic;
 mod writer;
 
+pub use check::{McapCheckError, TopicCheck, check_messages};
 pub use topic::{TopicMessage, read_topic_messages};
 use writer::seconds_to_ns;
 pub use writer::{ChannelId, McapCompression, McapWriter, number_object_schema};
