@@ -103,7 +103,12 @@ fn run_two_corners_writes_csv_and_mcap_that_read_back() {
     assert_eq!(updates.len(), 11);
     let update: serde_json::Value = serde_json::from_slice(&updates[1].data).unwrap();
     let entity = &update["entities"][0];
-    assert_eq!(entity["frame_id"], "world");
+    // One frame convention: entities in the simulation's frame, unrotated; /tf rotates.
+    assert_eq!(entity["frame_id"], "cloth");
+    assert_eq!(
+        entity["triangles"][0]["pose"]["orientation"],
+        serde_json::json!({ "x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0 })
+    );
     assert!(update["deletions"].as_array().unwrap().is_empty());
     for key in [
         "arrows",
@@ -132,6 +137,12 @@ fn run_two_corners_writes_csv_and_mcap_that_read_back() {
     let tf = read_topic_messages(&bytes, "/tf").unwrap();
     let tf: serde_json::Value = serde_json::from_slice(&tf[0].data).unwrap();
     assert_eq!(tf["parent_frame_id"], "world");
+    assert_eq!(tf["child_frame_id"], "cloth");
+    // Every message validates, complete, against its schema (Foxglove's published ones).
+    let checked =
+        modelgap::io::mcap::check_messages(&bytes, modelgap::io::json_schema::Strictness::Complete)
+            .unwrap();
+    assert_eq!(checked.len(), 3, "{checked:?}");
 }
 
 #[test]

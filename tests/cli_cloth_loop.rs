@@ -155,6 +155,10 @@ fn compare_explain_fix_find_the_hidden_drag_and_the_error_falls() {
             .len(),
         1
     );
+    let checked =
+        modelgap::io::mcap::check_messages(&mcap, modelgap::io::json_schema::Strictness::Complete)
+            .unwrap();
+    assert_eq!(checked.len(), 5, "{checked:?}");
 
     // explain: drag first, the error falls to the floor.
     let ex = json(&["explain", "--model", &scene, "--data", &data, "--json"]);

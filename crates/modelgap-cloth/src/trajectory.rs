@@ -4,10 +4,12 @@
 //! The MCAP file holds three topics: [`MARKERS_TOPIC`](crate::markers::MARKERS_TOPIC) (the
 //! marker frames, readable with [`read_markers_mcap`](crate::markers::read_markers_mcap)),
 //! [`CLOTH_TOPIC`] (a `foxglove.SceneUpdate` per frame: the mesh as a triangle list and its
-//! edges as a line list, in frame [`WORLD_FRAME`]) and [`TF_TOPIC`] (one static
-//! `foxglove.FrameTransform` from `world` to the simulation's frame `cloth`). The
-//! simulation is y-up and Foxglove is z-up: the primitives' pose (and the transform) turn
-//! +y into +z, so gravity points down on screen.
+//! edges as a line list, in the simulation's frame [`CLOTH_FRAME`], identity poses,
+//! coordinates rounded to [`DRAWN_DECIMALS`]) and [`TF_TOPIC`] (one static
+//! `foxglove.FrameTransform` from [`WORLD_FRAME`] to [`CLOTH_FRAME`]). The simulation is y-up
+//! and Foxglove is z-up: the transform, and nothing else, turns +y into +z, so gravity
+//! points down on screen. Both Foxglove channels carry Foxglove's published JSON Schemas
+//! ([`modelgap_core::io::foxglove`]).
 //!
 //! # Example
 //!
@@ -32,6 +34,11 @@ use std::sync::Arc;
 use modelgap_core::fit::Cancel;
 use modelgap_core::io::Format;
 use modelgap_core::io::atomic::{AtomicFile, commit_buffered};
+use modelgap_core::io::foxglove::{
+    Color, FrameTransform, KeyValuePair, LinePrimitive, LineType, Pose, Quaternion, SceneEntity,
+    SceneUpdate, Time, TriangleListPrimitive, Vector3, add_frame_transform_channel,
+    add_scene_update_channel, write_message,
+};
 use modelgap_core::io::mcap::{McapCompression, McapWriter};
 
 use crate::error::{ClothError, Result};
@@ -47,10 +54,11 @@ pub const CLOTH_TOPIC: &str = "/cloth";
 /// The MCAP topic of the static `foxglove.FrameTransform`.
 pub const TF_TOPIC: &str = "/tf";
 
-/// The frame the cloth's scene entities are drawn in.
+/// Foxglove's fixed frame (z-up), the parent of [`CLOTH_FRAME`].
 pub const WORLD_FRAME: &str = "world";
 
-/// The simulation's own (y-up) frame, a child of [`WORLD_FRAME`].
+/// The simulation's own (y-up) frame, a child of [`WORLD_FRAME`]: every scene entity of
+/// modelgap's cloth files is drawn in it.
 pub const CLOTH_FRAME: &str = "cloth";
 
 /// Which vertices a run records as markers.
@@ -336,19 +344,11 @@ pub fn write_run_mcap<W: Write + Seek>(
         return Err(ClothError::NoMarkerFrames { path: None });
     };
     let mut out = McapWriter::new(writer, compression)?;
-    let tf = out.add_json_channel(
-        TF_TOPIC,
-        "foxglove.FrameTransform",
-        &object_schema("foxglove.FrameTransform"),
-    )?;
-    let scene = out.add_json_channel(
-        CLOTH_TOPIC,
-        "foxglove.SceneUpdate",
-        &object_schema("foxglove.SceneUpdate"),
-    )?;
+    let tf = add_frame_transform_channel(&mut out, TF_TOPIC)?;
+    let scene = add_scene_update_channel(&mut out, CLOTH_TOPIC)?;
     let channel = add_markers_channel(&mut out)?;
     let t0 = markers.t()[0];
-    out.write_json(tf, 0.0, &frame_transform(0.0))?;
+    write_message(&mut out, tf, 0.0, &cloth_frame_transform())?;
     let triangle_indices: Vec<u32> = run.triangles.iter().flatten().copied().collect();
     let edge_indices: Vec<u32> = run.edges.iter().flatten().copied().collect();
     for ((&t, frame), mesh) in markers
@@ -358,7 +358,7 @@ pub fn write_run_mcap<W: Write + Seek>(
         .zip(&run.mesh_frames)
     {
         let update = scene_update(&run.scene, t - t0, mesh, &triangle_indices, &edge_indices);
-        out.write_json(scene, t - t0, &update)?;
+        write_message(&mut out, scene, t - t0, &update)?;
         write_markers_frame(&mut out, channel, t - t0, markers.ids(), frame)?;
     }
     Ok(out.finish()?)
@@ -389,36 +389,37 @@ pub fn write_run_path(run: &ClothRun, path: &Path) -> Result<()> {
     }
 }
 
-/// A minimal JSON schema naming a Foxglove message type (Foxglove picks the panel by the
-/// schema name; the fields are those of its published schemas).
-fn object_schema(title: &str) -> serde_json::Value {
-    serde_json::json!({
-        "$schema": "https://json-schema.org/draft/2020-12/schema",
-        "title": title,
-        "type": "object",
-    })
-}
+/// Coordinates drawn in Foxglove (the mesh, the measured markers as spheres) are rounded to
+/// this many decimals of a metre: 0.1 mm, a tenth of the markers' noise in the reference
+/// recordings and far below what a 3D view shows. The [`MARKERS_TOPIC`](crate::markers::MARKERS_TOPIC)
+/// frames, which read back as data, are written exactly.
+pub const DRAWN_DECIMALS: u8 = 4;
 
-/// A Foxglove `Time`: whole seconds and nanoseconds.
-fn time(t: f64) -> serde_json::Value {
-    let ns = (t.max(0.0) * 1e9).round() as u64;
-    serde_json::json!({ "sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000 })
-}
-
-/// Turns the simulation's +y (up) into Foxglove's +z (up): +90° about x.
-fn y_up_to_z_up() -> serde_json::Value {
+/// The static transform from [`WORLD_FRAME`] (Foxglove's z-up) to [`CLOTH_FRAME`] (the
+/// simulation's y-up): +90° about x, so +y of the simulation is +z on screen. Every entity
+/// of modelgap's cloth files is drawn in [`CLOTH_FRAME`] with identity poses; this transform
+/// is the only rotation in them.
+pub(crate) fn cloth_frame_transform() -> FrameTransform {
     let h = std::f64::consts::FRAC_1_SQRT_2;
-    serde_json::json!({ "x": h, "y": 0.0, "z": 0.0, "w": h })
+    FrameTransform {
+        timestamp: Time::default(),
+        parent_frame_id: WORLD_FRAME.to_owned(),
+        child_frame_id: CLOTH_FRAME.to_owned(),
+        translation: Vector3::ZERO,
+        rotation: Quaternion {
+            x: h,
+            y: 0.0,
+            z: 0.0,
+            w: h,
+        },
+    }
 }
 
-fn frame_transform(t: f64) -> serde_json::Value {
-    serde_json::json!({
-        "timestamp": time(t),
-        "parent_frame_id": WORLD_FRAME,
-        "child_frame_id": CLOTH_FRAME,
-        "translation": { "x": 0.0, "y": 0.0, "z": 0.0 },
-        "rotation": y_up_to_z_up(),
-    })
+/// The mesh vertices as points in [`CLOTH_FRAME`], rounded to [`DRAWN_DECIMALS`].
+pub(crate) fn drawn_points(mesh: &[[f64; 3]]) -> Vec<Vector3> {
+    mesh.iter()
+        .map(|&p| Vector3::rounded(p, DRAWN_DECIMALS))
+        .collect()
 }
 
 fn scene_update(
@@ -427,57 +428,120 @@ fn scene_update(
     mesh: &[[f64; 3]],
     triangle_indices: &[u32],
     edge_indices: &[u32],
-) -> serde_json::Value {
-    let points: Vec<serde_json::Value> = mesh
-        .iter()
-        .map(|&[x, y, z]| serde_json::json!({ "x": x, "y": y, "z": z }))
-        .collect();
-    let pose = serde_json::json!({
-        "position": { "x": 0.0, "y": 0.0, "z": 0.0 },
-        "orientation": y_up_to_z_up(),
+) -> SceneUpdate {
+    let points = drawn_points(mesh);
+    let mut entity = SceneEntity::new(t, CLOTH_FRAME, "cloth");
+    entity.metadata.push(KeyValuePair::new("scene", name));
+    entity.lines.push(LinePrimitive {
+        kind: LineType::List,
+        pose: Pose::IDENTITY,
+        thickness: 1.0,
+        scale_invariant: true,
+        points: points.clone(),
+        color: Color::opaque([0.1, 0.1, 0.2]),
+        colors: Vec::new(),
+        indices: edge_indices.to_vec(),
     });
-    let triangles = serde_json::json!({
-        "pose": pose,
-        "points": points,
-        "color": { "r": 0.25, "g": 0.55, "b": 0.9, "a": 0.85 },
-        "colors": [],
-        "indices": triangle_indices,
+    entity.triangles.push(TriangleListPrimitive {
+        pose: Pose::IDENTITY,
+        points,
+        color: Color::with_alpha([0.25, 0.55, 0.9], 0.85),
+        colors: Vec::new(),
+        indices: triangle_indices.to_vec(),
     });
-    let lines = serde_json::json!({
-        "type": 2, // LINE_LIST: each pair of indices is a segment
-        "pose": pose,
-        "thickness": 1.0,
-        "scale_invariant": true,
-        "points": points,
-        "color": { "r": 0.1, "g": 0.1, "b": 0.2, "a": 1.0 },
-        "colors": [],
-        "indices": edge_indices,
-    });
-    serde_json::json!({
-        "deletions": [],
-        "entities": [{
-            "timestamp": time(t),
-            "frame_id": WORLD_FRAME,
-            "id": "cloth",
-            "lifetime": { "sec": 0, "nsec": 0 },
-            "frame_locked": false,
-            "metadata": [{ "key": "scene", "value": name }],
-            "arrows": [],
-            "cubes": [],
-            "spheres": [],
-            "cylinders": [],
-            "lines": [lines],
-            "triangles": [triangles],
-            "texts": [],
-            "models": [],
-        }],
-    })
+    SceneUpdate {
+        deletions: Vec::new(),
+        entities: vec![entity],
+    }
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
+    use modelgap_core::io::json_schema::Strictness;
+    use modelgap_core::io::mcap::{check_messages, read_topic_messages};
+    use serde_json::Value;
+
     use super::*;
     use crate::scenes;
+
+    /// Every message of a cloth MCAP file validates, complete, against its channel's schema
+    /// (Foxglove's published ones for the scene and the transform), `n_scene_topics`
+    /// topics hold scene updates, and the file has one frame convention: every entity in
+    /// [`CLOTH_FRAME`] with unrotated primitives, the rotation only in the one transform on
+    /// [`TF_TOPIC`], from [`WORLD_FRAME`].
+    pub(crate) fn assert_foxglove_file(bytes: &[u8], n_scene_topics: usize) {
+        let checked = check_messages(bytes, Strictness::Complete).unwrap();
+        let scene_topics: Vec<&str> = checked
+            .iter()
+            .filter(|c| c.schema == "foxglove.SceneUpdate")
+            .map(|c| c.topic.as_str())
+            .collect();
+        assert_eq!(scene_topics.len(), n_scene_topics, "{checked:?}");
+        for topic in scene_topics {
+            for m in read_topic_messages(bytes, topic).unwrap() {
+                let update: Value = serde_json::from_slice(&m.data).unwrap();
+                for entity in update["entities"].as_array().unwrap() {
+                    assert_eq!(entity["frame_id"], CLOTH_FRAME, "{topic}");
+                    for kind in ["spheres", "lines", "triangles"] {
+                        for p in entity[kind].as_array().unwrap() {
+                            let q = &p["pose"]["orientation"];
+                            assert_eq!(
+                                (&q["x"], &q["y"], &q["z"], &q["w"]),
+                                (&0.0.into(), &0.0.into(), &0.0.into(), &1.0.into()),
+                                "{topic} {kind}"
+                            );
+                            if kind != "spheres" {
+                                assert_eq!(
+                                    p["pose"]["position"],
+                                    serde_json::json!({"x": 0.0, "y": 0.0, "z": 0.0})
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let tf = read_topic_messages(bytes, TF_TOPIC).unwrap();
+        assert_eq!(tf.len(), 1);
+        let tf: Value = serde_json::from_slice(&tf[0].data).unwrap();
+        assert_eq!(
+            (&tf["parent_frame_id"], &tf["child_frame_id"]),
+            (&WORLD_FRAME.into(), &CLOTH_FRAME.into())
+        );
+    }
+
+    #[test]
+    fn a_run_file_validates_with_one_frame_convention_and_rounded_points() {
+        let scene = scenes::corner().resized(6, 6).unwrap();
+        let options = RunOptions {
+            duration: Some(0.1),
+            ..RunOptions::default()
+        };
+        let run = run_scene(&scene, &options).unwrap();
+        let bytes = write_run_mcap(
+            &run,
+            std::io::Cursor::new(Vec::new()),
+            McapCompression::Zstd,
+        )
+        .unwrap()
+        .into_inner();
+        assert_foxglove_file(&bytes, 1);
+        let first = &read_topic_messages(&bytes, CLOTH_TOPIC).unwrap()[0];
+        let update: Value = serde_json::from_slice(&first.data).unwrap();
+        for p in update["entities"][0]["triangles"][0]["points"]
+            .as_array()
+            .unwrap()
+        {
+            for c in ["x", "y", "z"] {
+                let text = p[c].to_string();
+                let decimals = text.split('.').nth(1).map_or(0, str::len);
+                assert!(decimals <= usize::from(DRAWN_DECIMALS), "{text}");
+            }
+        }
+        // The markers, data, read back exactly.
+        let back = crate::markers::read_markers_mcap(&bytes).unwrap();
+        assert_eq!(back.positions(), run.markers.as_ref().unwrap().positions());
+    }
 
     /// Issue 12: a run counts the steps that fell back to Gauss–Seidel.
     #[test]

@@ -1,12 +1,16 @@
 //! The cloth comparison as MCAP for Foxglove's 3D and Plot panels: the model's mesh
-//! coloured by the marker error at each frame (`foxglove.SceneUpdate`, JSON), the measured
-//! markers, a `/tf` frame, and the error per marker as flat JSON.
+//! coloured by the marker error at each frame, the measured markers as spheres (both
+//! `foxglove.SceneUpdate`), a `/tf` frame, and the error per marker as flat JSON.
 
 use modelgap_core::io::atomic::{AtomicFile, commit_buffered};
 use std::io::{BufWriter, Seek, Write};
 use std::path::Path;
 
 use modelgap_core::CoreError;
+use modelgap_core::io::foxglove::{
+    Color, KeyValuePair, Pose, SceneEntity, SceneUpdate, SpherePrimitive, TriangleListPrimitive,
+    Vector3, add_frame_transform_channel, add_scene_update_channel, round_to, write_message,
+};
 use modelgap_core::io::mcap::{ChannelId, McapCompression, McapWriter, number_object_schema};
 use serde_json::{Value, json};
 
@@ -14,7 +18,9 @@ use super::ClothComparison;
 use super::map::{error_colour, interpolate, nice_ceiling, vertex_weights};
 use crate::error::{ClothError, Result};
 use crate::markers::{MarkerRecording, add_markers_channel, write_markers_frame};
-use crate::trajectory::{CLOTH_FRAME, TF_TOPIC, WORLD_FRAME};
+use crate::trajectory::{
+    CLOTH_FRAME, DRAWN_DECIMALS, TF_TOPIC, cloth_frame_transform, drawn_points,
+};
 
 /// Topic of the model's mesh coloured by error (`foxglove.SceneUpdate`), model as given.
 pub const CLOTH_ERROR_TOPIC: &str = "/cloth_error";
@@ -24,9 +30,16 @@ pub const CLOTH_ERROR_AFTER_TOPIC: &str = "/cloth_error_after";
 pub const MARKER_ERROR_TOPIC: &str = "/marker_error";
 /// Topic of the error per marker with the effect added.
 pub const MARKER_ERROR_AFTER_TOPIC: &str = "/marker_error_after";
+/// Topic of the measured markers drawn as spheres (`foxglove.SceneUpdate`), once per frame
+/// for both models.
+pub const MEASURED_MARKERS_TOPIC: &str = "/measured_markers";
 
-/// Coordinates are written rounded to this (m): 1 µm, far below any marker noise.
-const POSITION_QUANTUM: f64 = 1e-6;
+/// The errors on [`MARKER_ERROR_TOPIC`] are rounded to this many decimals of a metre: 1 µm,
+/// the resolution of the marker recordings.
+pub const ERROR_DECIMALS: u8 = 6;
+
+/// Diameter of a measured marker's sphere (m).
+const MARKER_DIAMETER: f64 = 0.012;
 
 /// What [`write_error_mcap`] writes.
 #[derive(Clone, Copy, Debug)]
@@ -46,12 +59,16 @@ pub struct ErrorMcap<'a> {
 }
 
 /// Writes a cloth comparison as MCAP: [`TF_TOPIC`] (a static `foxglove.FrameTransform` from
-/// `world` to the y-up frame `cloth`), [`CLOTH_ERROR_TOPIC`] (per frame a
-/// `foxglove.SceneUpdate`: the model's mesh with one colour per vertex, blue where it meets
-/// the markers and red where it is off by the colour scale's top or more, and the measured
-/// markers as small spheres), [`MARKER_ERROR_TOPIC`] (the 3D distance per marker and its RMS,
-/// m, for the Plot panel), the measured markers on `/markers`, and with `after` the same
-/// on [`CLOTH_ERROR_AFTER_TOPIC`] and [`MARKER_ERROR_AFTER_TOPIC`]. Times start at 0.
+/// `world` to the y-up frame `cloth`, the file's only rotation), [`CLOTH_ERROR_TOPIC`] (per
+/// frame a `foxglove.SceneUpdate`: the model's mesh with one colour per vertex, blue where it
+/// meets the markers and red where it is off by the colour scale's top or more),
+/// [`MEASURED_MARKERS_TOPIC`] (per frame the measured markers as small spheres),
+/// [`MARKER_ERROR_TOPIC`] (the 3D distance per marker and its RMS, m, rounded to
+/// [`ERROR_DECIMALS`], for the Plot panel), the measured markers as data on `/markers`, and
+/// with `after` the same on [`CLOTH_ERROR_AFTER_TOPIC`] and [`MARKER_ERROR_AFTER_TOPIC`].
+/// Scene entities are in frame `cloth` with identity poses, their coordinates rounded to
+/// [`DRAWN_DECIMALS`]; the Foxglove channels carry Foxglove's published schemas. Times start
+/// at 0.
 ///
 /// # Errors
 ///
@@ -63,18 +80,7 @@ pub fn write_error_mcap<W: Write + Seek>(m: &ErrorMcap<'_>, writer: W) -> Result
     let weights = vertex_weights(m.before);
     let scale = nice_ceiling(m.before.markers.iter().map(|x| x.rms).fold(0.0, f64::max));
     let mut out = McapWriter::new(writer, McapCompression::Zstd)?;
-    let schema = |title: &str| {
-        json!({
-            "$schema": "https://json-schema.org/draft/2020-12/schema",
-            "title": title,
-            "type": "object",
-        })
-    };
-    let tf = out.add_json_channel(
-        TF_TOPIC,
-        "foxglove.FrameTransform",
-        &schema("foxglove.FrameTransform"),
-    )?;
+    let tf = add_frame_transform_channel(&mut out, TF_TOPIC)?;
     let mut streams: Vec<Stream<'_>> = Vec::new();
     let names: Vec<String> = m
         .before
@@ -101,11 +107,7 @@ pub fn write_error_mcap<W: Write + Seek>(m: &ErrorMcap<'_>, writer: W) -> Result
         ));
     }
     for (c, mesh, scene_topic, error_topic, label) in sides {
-        let scene = out.add_json_channel(
-            scene_topic,
-            "foxglove.SceneUpdate",
-            &schema("foxglove.SceneUpdate"),
-        )?;
+        let scene = add_scene_update_channel(&mut out, scene_topic)?;
         let error = out.add_json_channel(
             error_topic,
             "modelgap.MarkerError",
@@ -119,9 +121,12 @@ pub fn write_error_mcap<W: Write + Seek>(m: &ErrorMcap<'_>, writer: W) -> Result
             label,
         });
     }
+    let measured_scene = add_scene_update_channel(&mut out, MEASURED_MARKERS_TOPIC)?;
     let markers = add_markers_channel(&mut out)?;
     let t0 = m.measured.t()[0];
-    out.write_json(tf, 0.0, &frame_transform())?;
+    let indices: Vec<u32> = m.triangles.iter().flatten().copied().collect();
+    let legend = format!("blue 0 mm to red {} mm", scale * 1e3);
+    write_message(&mut out, tf, 0.0, &cloth_frame_transform())?;
     for (k, (&t, frame)) in m
         .measured
         .t()
@@ -140,19 +145,79 @@ pub fn write_error_mcap<W: Write + Seek>(m: &ErrorMcap<'_>, writer: W) -> Result
         {
             let per_marker: Vec<f64> = c.markers.iter().map(|x| x.distance[k]).collect();
             let values = interpolate(&weights, &per_marker);
-            let update = scene_update(m, t, &mesh[k][..n_vertices], &values, scale, frame, label);
-            out.write_json(scene, t, &update)?;
+            let mut entity = SceneEntity::new(t, CLOTH_FRAME, "model mesh coloured by error");
+            entity.metadata = vec![
+                KeyValuePair::new("scene", m.scene),
+                KeyValuePair::new("model", label),
+                KeyValuePair::new("colour scale", legend.as_str()),
+            ];
+            entity.triangles.push(TriangleListPrimitive {
+                pose: Pose::IDENTITY,
+                points: drawn_points(&mesh[k][..n_vertices]),
+                color: Color::opaque([0.5, 0.5, 0.5]),
+                colors: values
+                    .iter()
+                    .map(|&v| Color::opaque(error_colour(colour_step(v / scale))))
+                    .collect(),
+                indices: indices.clone(),
+            });
+            let update = SceneUpdate {
+                deletions: Vec::new(),
+                entities: vec![entity],
+            };
+            write_message(&mut out, scene, t, &update)?;
             let mut fields: serde_json::Map<String, Value> = c
                 .markers
                 .iter()
-                .map(|x| (format!("m{}", x.id), json!(x.distance[k])))
+                .map(|x| {
+                    (
+                        format!("m{}", x.id),
+                        json!(round_to(x.distance[k], ERROR_DECIMALS)),
+                    )
+                })
                 .collect();
-            fields.insert("rms".to_owned(), json!(c.error_over_time[k]));
+            fields.insert(
+                "rms".to_owned(),
+                json!(round_to(c.error_over_time[k], ERROR_DECIMALS)),
+            );
             out.write_json(error, t, &Value::Object(fields))?;
         }
+        write_message(
+            &mut out,
+            measured_scene,
+            t,
+            &measured_update(m.scene, t, frame),
+        )?;
         write_markers_frame(&mut out, markers, t, m.measured.ids(), frame)?;
     }
     Ok(out.finish()?)
+}
+
+/// Steps of the colour scale: the error is drawn to 2 % of the scale's top (51 colours),
+/// finer than a colour is read and a third fewer bytes than colours to 0.01.
+const COLOUR_STEPS: f64 = 50.0;
+
+/// A fraction of the colour scale rounded to a step of [`COLOUR_STEPS`].
+fn colour_step(fraction: f64) -> f64 {
+    (fraction * COLOUR_STEPS).round() / COLOUR_STEPS
+}
+
+/// The measured markers of one frame as spheres in frame `cloth`.
+fn measured_update(scene: &str, t: f64, frame: &[[f64; 3]]) -> SceneUpdate {
+    let mut entity = SceneEntity::new(t, CLOTH_FRAME, "measured markers");
+    entity.metadata.push(KeyValuePair::new("scene", scene));
+    entity.spheres = frame
+        .iter()
+        .map(|&p| SpherePrimitive {
+            pose: Pose::at(Vector3::rounded(p, DRAWN_DECIMALS)),
+            size: Vector3::splat(MARKER_DIAMETER),
+            color: Color::opaque([0.1, 0.1, 0.1]),
+        })
+        .collect();
+    SceneUpdate {
+        deletions: Vec::new(),
+        entities: vec![entity],
+    }
 }
 
 /// One side of the comparison (the model as given, or with the effect) and its channels.
@@ -213,102 +278,4 @@ fn validate(m: &ErrorMcap<'_>) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// A Foxglove `Time`: whole seconds and nanoseconds.
-fn time(t: f64) -> Value {
-    let ns = (t.max(0.0) * 1e9).round() as u64;
-    json!({ "sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000 })
-}
-
-/// Turns the simulation's +y (up) into Foxglove's +z (up): +90° about x.
-fn y_up_to_z_up() -> Value {
-    let h = std::f64::consts::FRAC_1_SQRT_2;
-    json!({ "x": h, "y": 0.0, "z": 0.0, "w": h })
-}
-
-fn frame_transform() -> Value {
-    json!({
-        "timestamp": time(0.0),
-        "parent_frame_id": WORLD_FRAME,
-        "child_frame_id": CLOTH_FRAME,
-        "translation": { "x": 0.0, "y": 0.0, "z": 0.0 },
-        "rotation": y_up_to_z_up(),
-    })
-}
-
-fn point(p: [f64; 3]) -> Value {
-    let q = |v: f64| (v / POSITION_QUANTUM).round() * POSITION_QUANTUM;
-    json!({ "x": q(p[0]), "y": q(p[1]), "z": q(p[2]) })
-}
-
-fn rgba(c: [f64; 3], a: f64) -> Value {
-    let q = |v: f64| (v * 1000.0).round() / 1000.0;
-    json!({ "r": q(c[0]), "g": q(c[1]), "b": q(c[2]), "a": a })
-}
-
-fn scene_update(
-    m: &ErrorMcap<'_>,
-    t: f64,
-    mesh: &[[f64; 3]],
-    values: &[f64],
-    scale: f64,
-    measured: &[[f64; 3]],
-    label: &str,
-) -> Value {
-    let pose = json!({
-        "position": { "x": 0.0, "y": 0.0, "z": 0.0 },
-        "orientation": y_up_to_z_up(),
-    });
-    let points: Vec<Value> = mesh.iter().map(|&p| point(p)).collect();
-    let colors: Vec<Value> = values
-        .iter()
-        .map(|&v| rgba(error_colour(v / scale), 1.0))
-        .collect();
-    let indices: Vec<u32> = m.triangles.iter().flatten().copied().collect();
-    let triangles = json!({
-        "pose": pose,
-        "points": points,
-        "color": rgba([0.5, 0.5, 0.5], 1.0),
-        "colors": colors,
-        "indices": indices,
-    });
-    let spheres: Vec<Value> = measured
-        .iter()
-        .map(|&p| {
-            json!({
-                "pose": {
-                    "position": point(p),
-                    "orientation": { "x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0 },
-                },
-                "size": { "x": 0.012, "y": 0.012, "z": 0.012 },
-                "color": rgba([0.1, 0.1, 0.1], 1.0),
-            })
-        })
-        .collect();
-    let measured_entity = json!({
-        "timestamp": time(t),
-        "frame_id": CLOTH_FRAME,
-        "id": "measured markers",
-        "lifetime": { "sec": 0, "nsec": 0 },
-        "frame_locked": false,
-        "metadata": [{ "key": "scene", "value": m.scene }],
-        "arrows": [], "cubes": [], "spheres": spheres, "cylinders": [], "lines": [],
-        "triangles": [], "texts": [], "models": [],
-    });
-    let mesh_entity = json!({
-        "timestamp": time(t),
-        "frame_id": WORLD_FRAME,
-        "id": "model mesh coloured by error",
-        "lifetime": { "sec": 0, "nsec": 0 },
-        "frame_locked": false,
-        "metadata": [
-            { "key": "scene", "value": m.scene },
-            { "key": "model", "value": label },
-            { "key": "colour scale", "value": format!("blue 0 mm to red {} mm", scale * 1e3) },
-        ],
-        "arrows": [], "cubes": [], "spheres": [], "cylinders": [], "lines": [],
-        "triangles": [triangles], "texts": [], "models": [],
-    });
-    json!({ "deletions": [], "entities": [mesh_entity, measured_entity] })
 }

@@ -197,17 +197,23 @@ fn error_mcap_holds_the_coloured_mesh_the_markers_and_the_errors() {
     assert_eq!(back.n_frames(), 100);
     let errors = read_signals(&bytes, MARKER_ERROR_TOPIC).unwrap();
     approx::assert_relative_eq!(errors.values("m80").unwrap()[99], 16e-3, epsilon = 1e-12);
-    approx::assert_relative_eq!(
+    // Rounded to 1 µm.
+    approx::assert_abs_diff_eq!(
         errors.values("rms").unwrap()[99],
         cc.error_over_time[99],
-        epsilon = 1e-15
+        epsilon = 0.5e-6
     );
     let scenes =
         modelgap_core::io::mcap::read_topic_messages(&bytes, CLOTH_ERROR_AFTER_TOPIC).unwrap();
     assert_eq!(scenes.len(), 100);
+    let spheres =
+        modelgap_core::io::mcap::read_topic_messages(&bytes, foxglove::MEASURED_MARKERS_TOPIC)
+            .unwrap();
+    assert_eq!(spheres.len(), 100);
     let tf =
         modelgap_core::io::mcap::read_topic_messages(&bytes, crate::trajectory::TF_TOPIC).unwrap();
     assert_eq!(tf.len(), 1);
+    crate::trajectory::tests::assert_foxglove_file(&bytes, 3);
 
     // A mesh with a frame missing is refused before anything is written.
     let short = &frames[..99];
