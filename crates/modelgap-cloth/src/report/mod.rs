@@ -74,8 +74,9 @@ mod map;
 pub mod story;
 
 pub use foxglove::{
-    CLOTH_ERROR_AFTER_TOPIC, CLOTH_ERROR_TOPIC, ErrorMcap, MARKER_ERROR_AFTER_TOPIC,
-    MARKER_ERROR_TOPIC, write_error_mcap, write_error_mcap_path,
+    CLOTH_ERROR_AFTER_TOPIC, CLOTH_ERROR_TOPIC, ERROR_DECIMALS, ErrorMcap,
+    MARKER_ERROR_AFTER_TOPIC, MARKER_ERROR_TOPIC, MEASURED_MARKERS_TOPIC, write_error_mcap,
+    write_error_mcap_path,
 };
 pub use map::{error_colour, error_map_svg};
 
