@@ -205,7 +205,7 @@ impl PyClothMesh {
     }
 
     /// Pins a vertex (makes its particle static). Raises ``DataError`` for a vertex past the
-    /// mesh or an edge that would join two pins.
+    /// mesh. Neighbouring pins are allowed: the edge between them is not a constraint.
     fn pin(&mut self, vertex: &Bound<'_, PyAny>) -> PyResult<()> {
         let v = index_list_from_py(&PyTuple::new(vertex.py(), [vertex])?.into_any(), "vertex")?;
         let mut mesh = self.inner.clone();
@@ -1029,7 +1029,7 @@ impl PyClothWorld {
     }
 
     /// Adds a cloth (a particle per vertex, a constraint per edge with its current length as
-    /// rest length) and returns its id.
+    /// rest length, except edges between two pinned vertices) and returns its id.
     fn add_cloth(&mut self, mesh: &Bound<'_, PyClothMesh>) -> PyResult<u32> {
         let id = self
             .inner

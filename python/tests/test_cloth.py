@@ -86,8 +86,6 @@ def test_bad_meshes_raise_value_errors_with_the_rust_message():
         ClothMesh.grid(1, 3, 0.1)
     with pytest.raises(DataError, match="parameter 'spacing' must be positive and finite, found 0"):
         ClothMesh.grid(3, 3, 0.0)
-    with pytest.raises(DataError, match="edge 0-1 joins two static particles"):
-        ClothMesh.grid(3, 3, 0.1, pins=[0, 1])
     with pytest.raises(DataError, match="vertex 7 is out of range: the mesh has 4 vertices"):
         ClothMesh(SQUARE, [[0, 1, 7]])
     with pytest.raises(DataError, match="edge 0-1 has zero rest length"):
@@ -106,9 +104,18 @@ def test_bad_meshes_raise_value_errors_with_the_rust_message():
         ClothMesh.grid(2, 2, 1.0, pins=[4])
     assert isinstance(e.value, ValueError) and isinstance(e.value, ModelgapError)
     mesh = ClothMesh(SQUARE, SQUARE_TRIANGLES, pins=[0])
-    with pytest.raises(DataError, match="joins two static particles"):
-        mesh.pin(1)
+    with pytest.raises(DataError, match="vertex 4 is out of range"):
+        mesh.pin(4)
     assert mesh.pinned == [0]  # a failed pin leaves the mesh as it was
+
+
+def test_neighbouring_pins_are_allowed_and_their_edge_is_not_a_constraint():
+    mesh = ClothMesh.grid(3, 3, 0.1, pins=[0, 1, 2])
+    assert mesh.pinned == [0, 1, 2]
+    world = ClothWorld()
+    world.add_cloth(mesh)
+    assert world.n_constraints == mesh.n_edges - 2
+    assert world.step(0.01).converged
 
 
 def test_a_hanging_cloth_holds_its_constraints():

@@ -22,14 +22,6 @@ pub enum ClothError {
         /// Second particle of the edge.
         b: u32,
     },
-    /// An edge joins two static particles; no impulse can move either.
-    #[error("edge {a}-{b} joins two static particles; at least one end must be dynamic")]
-    StaticEdge {
-        /// First particle of the edge.
-        a: u32,
-        /// Second particle of the edge.
-        b: u32,
-    },
     /// An edge refers to itself (a = b).
     #[error("edge {a}-{a} joins a particle to itself")]
     DegenerateEdge {
@@ -219,6 +211,18 @@ pub enum ClothError {
         expected: String,
         /// What was given.
         found: String,
+    },
+    /// A field of a scene file cannot be used; the error names its line.
+    #[error("scene '{scene}' line {line}, `{field}`: {message}")]
+    SceneAt {
+        /// The scene's name or file name.
+        scene: String,
+        /// The 1-based line of the field.
+        line: usize,
+        /// The field, as written in the file (`pins.attach[0].rows[1]`).
+        field: String,
+        /// What was expected and found.
+        message: String,
     },
     /// A scene pins the same vertex twice.
     #[error(

@@ -112,6 +112,8 @@ pub fn swing(nx: usize, nz: usize, duration: f64) -> Result<Scene> {
         cloth,
         colliders: Vec::new(),
         pin_paths,
+        rails: Vec::new(),
+        rail_pins: Vec::new(),
         pins_from_markers: false,
         pin_markers: None,
         effects: crate::forces::ClothEffects {

@@ -7,7 +7,9 @@
 //!
 //! A path is piecewise linear through points `(t, x, y, z)` and held at its first point
 //! before the first time and at its last point after the last: a scene file's
-//! `[[pins.paths]]`, or a marker recording's track ([`follow_markers`]).
+//! `[[pins.paths]]`, or a marker recording's track ([`follow_markers`]). A pin can also
+//! ride a [`Rail`] shared with other pins (a scene file's `[[rails]]` and
+//! `[[pins.attach]]`, see [`crate::rail`]).
 //!
 //! # Example
 //!
@@ -24,11 +26,14 @@
 //! # Ok::<(), modelgap_cloth::ClothError>(())
 //! ```
 
+use std::sync::Arc;
+
 use nalgebra::Vector3;
 
 use crate::error::{ClothError, Result};
 use crate::markers::MarkerRecording;
 use crate::particles::ParticleId;
+use crate::rail::Rail;
 use crate::world::{ClothId, ClothWorld};
 
 /// A piecewise-linear path through points at strictly increasing times.
@@ -127,13 +132,38 @@ impl PinPath {
     }
 }
 
-/// A pinned particle of a world and the path it follows.
+/// How a kinematic pin moves: its own path, or riding a [`Rail`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum PinMotion {
+    /// Its own path (absolute positions).
+    Path(PinPath),
+    /// A point of a rail's frame ([`Rail::local`]), shared with every vertex on the rail.
+    Rail {
+        /// The rail.
+        rail: Arc<Rail>,
+        /// The point of the rail's frame the particle sits at (m).
+        local: Vector3<f64>,
+    },
+}
+
+impl PinMotion {
+    /// The position at time `t` (s).
+    #[must_use]
+    pub fn at(&self, t: f64) -> Vector3<f64> {
+        match self {
+            Self::Path(path) => path.at(t),
+            Self::Rail { rail, local } => rail.world(local, t),
+        }
+    }
+}
+
+/// A pinned particle of a world and how it moves.
 #[derive(Clone, Debug, PartialEq)]
 pub struct KinematicPin {
     /// The particle (static, `inv_mass = 0`).
     pub particle: ParticleId,
-    /// Its path.
-    pub path: PinPath,
+    /// Its motion.
+    pub motion: PinMotion,
 }
 
 /// Makes every pinned vertex of `cloth` whose id appears in `recording` follow the recorded

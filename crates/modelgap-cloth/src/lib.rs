@@ -39,7 +39,8 @@
 //! ([`Collider`]), [`world`] ([`ClothWorld`]; its step in named stages:
 //! check, preview, choose the solver, warm start, solve the constraints,
 //! commit, divergence check), [`kinematic`] ([`PinPath`]:
-//! pins that follow a path), [`markers`] ([`MarkerRecording`], marker CSV and
+//! pins that follow a path), [`rail`] ([`Rail`]: a moving frame that pinned
+//! vertices ride, its motion an expression of `t` or samples), [`markers`] ([`MarkerRecording`], marker CSV and
 //! MCAP files), [`scenes`] (the reference scenes), [`trajectory`] (running a
 //! scene, its recorded frames and Foxglove MCAP), [`forces`] (drag, wind,
 //! damping, bending: [`ClothForces`]; a scene's [`ClothEffects`]), [`model`]
@@ -59,6 +60,7 @@ pub mod mesh;
 pub mod model;
 pub mod newton;
 pub mod particles;
+pub mod rail;
 pub mod report;
 pub mod scene_world;
 pub mod scenes;
@@ -71,11 +73,12 @@ pub use constraints::DistanceConstraints;
 pub use contact::{Collider, ColliderId, Shape};
 pub use error::{ClothError, Result};
 pub use forces::{ClothEffects, ClothForces, PointMass};
-pub use kinematic::{KinematicPin, PinPath};
+pub use kinematic::{KinematicPin, PinMotion, PinPath};
 pub use markers::MarkerRecording;
 pub use mesh::{BuildMesh, ClothMesh, GridCloth, GridEdges};
 pub use model::{ClothModel, PredictSettings};
 pub use particles::{ParticleId, ParticleSet};
+pub use rail::Rail;
 pub use scenes::Scene;
 pub use solver::{Fallback, Method, SolverParams, StepReport};
 pub use world::{ClothId, ClothWorld};

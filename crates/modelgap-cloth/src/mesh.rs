@@ -170,7 +170,9 @@ impl ClothMesh {
     }
 
     /// Checks what a world needs: particles and edges exist, indices are in
-    /// range, edges have length, masses are positive, no edge joins two pins.
+    /// range, edges have length, masses are positive. An edge between two pins is allowed:
+    /// it is not a constraint ([`ClothWorld::add_cloth`](crate::ClothWorld::add_cloth)
+    /// leaves it out), so whole rows, borders and regions can be pinned.
     ///
     /// # Errors
     /// The first problem found, as a typed [`ClothError`].
@@ -225,9 +227,6 @@ impl ClothMesh {
             }
             if (self.positions[a as usize] - self.positions[b as usize]).norm() <= 0.0 {
                 return Err(ClothError::ZeroLengthEdge { a, b });
-            }
-            if self.pinned.binary_search(&a).is_ok() && self.pinned.binary_search(&b).is_ok() {
-                return Err(ClothError::StaticEdge { a, b });
             }
         }
         Ok(())
@@ -359,8 +358,8 @@ impl BuildMesh for GridCloth {
     /// [`ClothError::TooManyParticles`] for more than
     /// `max_particles` (checked before anything is allocated),
     /// [`ClothError::BadParameter`] for a non-positive spacing or mass,
-    /// [`ClothError::VertexOutOfRange`] for a pin past the grid, and
-    /// [`ClothError::StaticEdge`] for an edge between two pins.
+    /// and [`ClothError::VertexOutOfRange`] for a pin past the grid. Pins may be
+    /// neighbours (a whole row): the edge between them is not a constraint.
     fn build_mesh(&self) -> Result<ClothMesh> {
         let (nx, nz) = (self.nx, self.nz);
         self.n_vertices()?;
@@ -485,15 +484,11 @@ mod tests {
     }
 
     #[test]
-    fn pinning_a_whole_row_and_an_edge_between_pins_is_an_error() {
-        let err = GridCloth::new(3, 3, 1.0)
-            .pin_row(0)
-            .build_mesh()
-            .unwrap_err();
-        assert!(
-            matches!(err, ClothError::StaticEdge { a: 0, b: 1 }),
-            "{err}"
-        );
+    fn a_whole_row_can_be_pinned_and_a_pin_past_the_grid_is_an_error() {
+        let mesh = GridCloth::new(3, 3, 1.0).pin_row(0).build_mesh().unwrap();
+        assert_eq!(mesh.pinned, vec![0, 1, 2]);
+        // The mesh keeps every edge; the world leaves the pinned ones out.
+        assert_eq!(mesh.edges.len(), 12);
         let err = GridCloth::new(3, 3, 1.0).pin(9).build_mesh().unwrap_err();
         assert!(matches!(
             err,

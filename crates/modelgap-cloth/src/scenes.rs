@@ -83,7 +83,20 @@
 //! [[pins.paths]]            # any number: a vertex (pinned by this) following a path
 //! vertex = 29
 //! path = [[0.0, 0.983, 0.0, 0.0], [1.0, 1.5, 0.0, 0.0]]  # [t (s), x, y, z (m)], linear
+//!
+//! [[rails]]                 # any number: a moving frame, named once (crate::rail)
+//! name = "top"
+//! translation = ["0.03 * sin(2 * pi * 0.4 * t)", "0", "0"]  # m, or rows [t, x, y, z]
+//! rotation = ["0", "0", "0"]  # optional, rad, axis x angle about `origin` (optional)
+//!
+//! [[pins.attach]]           # any number: vertices (pinned by this) riding a rail
+//! rail = "top"
+//! rows = [0]                # and/or cols, vertices, regions [[c0, r0, c1, r1]], border
 //! ```
+//!
+//! Pins may be neighbours (a whole row, a border): the edge between two pins is not a
+//! constraint. See [`crate::rail::file`] for every field of `[[rails]]` and
+//! `[[pins.attach]]`; their errors name the line.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -97,6 +110,8 @@ use crate::forces::{AIR_DENSITY, ClothEffects, ClothForces, PointMass};
 use crate::kinematic::{PinPath, follow_markers};
 use crate::markers::{MarkerRecording, read_markers_path};
 use crate::mesh::GridCloth;
+use crate::rail::file::{AttachFile, RailFile, Reader};
+use crate::rail::{Rail, RailPins};
 use crate::solver::{MAX_GRAVITY, SolverParams};
 use crate::world::{ClothId, ClothWorld};
 
@@ -124,6 +139,11 @@ pub struct Scene {
     /// Pinned vertices that follow prescribed paths: (vertex index, path). Each vertex is
     /// also in the cloth's pins.
     pub pin_paths: Vec<(u32, PinPath)>,
+    /// Rails: moving frames named once ([`crate::rail`]).
+    pub rails: Vec<Rail>,
+    /// Vertices riding the rails, each set naming its rail. Each vertex is also in the
+    /// cloth's pins.
+    pub rail_pins: Vec<RailPins>,
     /// Whether pinned vertices whose ids appear in a marker recording follow the recorded
     /// positions (see [`build`](Self::build)).
     pub pins_from_markers: bool,
@@ -153,6 +173,8 @@ struct SceneFile {
     air: Option<AirFile>,
     #[serde(default)]
     point_masses: Vec<PointMass>,
+    #[serde(default)]
+    rails: Vec<RailFile>,
 }
 
 #[derive(Deserialize)]
@@ -172,6 +194,8 @@ struct PinsFile {
     markers: Option<PathBuf>,
     #[serde(default)]
     paths: Vec<PathFile>,
+    #[serde(default)]
+    attach: Vec<AttachFile>,
 }
 
 #[derive(Deserialize)]
@@ -484,8 +508,10 @@ impl Scene {
     /// [`ClothError::Scene`] for malformed TOML or unknown fields, or a collider that cannot
     /// be built (the message names it, `colliders[2]`, and its field);
     /// [`ClothError::SceneField`] for a field out of its range;
-    /// [`ClothError::DuplicatePin`] for a vertex pinned twice (in `cloth.pins` or
-    /// `pins.paths`).
+    /// [`ClothError::DuplicatePin`] for a vertex pinned twice (in `cloth.pins`,
+    /// `pins.paths` or `pins.attach`); [`ClothError::SceneAt`], naming the line and the
+    /// field, for a bad `[[rails]]` or `[[pins.attach]]` entry (an unknown rail name, a
+    /// vertex, row or column past the grid, a malformed row of samples or expression).
     pub fn from_toml(text: &str, label: &str) -> Result<Self> {
         Self::from_toml_in(text, label, None)
     }
@@ -566,6 +592,18 @@ impl Scene {
             cloth = cloth.pin(p.vertex);
             pin_paths.push((p.vertex, path));
         }
+        let reader = Reader { text, label };
+        let n_steps = (file.duration / file.dt).round().min(1e5) as usize;
+        let times: Vec<f64> = (0..=n_steps).map(|k| k as f64 * file.dt).collect();
+        let rails = reader.rails(&file.rails, &times)?;
+        let mut rail_pins = Vec::with_capacity(file.pins.attach.len());
+        for (set, vertices, at) in reader.attachments(&file.pins.attach, &rails, (c.nx, c.nz))? {
+            for v in vertices {
+                pin_once(v, format!("{at} (rail \"{}\")", set.rail))?;
+                cloth = cloth.pin(v);
+            }
+            rail_pins.push(set);
+        }
         let effects = effects_from_file(&file, n_vertices).map_err(in_scene)?;
         let colliders = colliders_from_file(&file.colliders, dir).map_err(bad)?;
         Ok(Self {
@@ -577,6 +615,8 @@ impl Scene {
             cloth,
             colliders,
             pin_paths,
+            rails,
+            rail_pins,
             pins_from_markers: file.pins.from_markers,
             pin_markers: file.pins.markers,
             effects,
@@ -604,7 +644,8 @@ impl Scene {
 
     /// The same scene on a grid of `nx × nz` vertices over the same width: pins (static and
     /// moving) go to the nearest vertex of the new grid at the same relative place, so
-    /// `two-corners` keeps its two corners.
+    /// `two-corners` keeps its two corners; the rows, columns and regions riding a rail stay
+    /// whole rows, columns and regions at the same relative place.
     ///
     /// # Errors
     ///
@@ -625,12 +666,26 @@ impl Scene {
         scene.cloth.nx = nx;
         scene.cloth.nz = nz;
         scene.cloth.spacing = old.spacing * (ox - 1) as f64 / (nx - 1) as f64;
-        scene.cloth.pinned = old.pinned.iter().map(|&v| map(v)).collect();
-        scene.cloth.pinned.sort_unstable();
-        scene.cloth.pinned.dedup();
+        let on_rails: Vec<u32> = self
+            .rail_pins
+            .iter()
+            .flat_map(|p| p.vertices.resolve(old.nx, old.nz))
+            .collect();
+        scene.cloth.pinned = old
+            .pinned
+            .iter()
+            .filter(|v| !on_rails.contains(v))
+            .map(|&v| map(v))
+            .collect();
         for (v, _) in &mut scene.pin_paths {
             *v = map(*v);
         }
+        for p in &mut scene.rail_pins {
+            p.vertices = p.vertices.resized((ox, oz), (nx, nz), map);
+            scene.cloth.pinned.extend(p.vertices.resolve(nx, nz));
+        }
+        scene.cloth.pinned.sort_unstable();
+        scene.cloth.pinned.dedup();
         Ok(scene)
     }
 
@@ -648,7 +703,10 @@ impl Scene {
         let text = |t: &str| serde_json::to_string(t).unwrap_or_else(|_| "\"\"".into());
         let mut out = String::new();
         let c = &self.cloth;
-        let path_vertices: Vec<u32> = self.pin_paths.iter().map(|(v, _)| *v).collect();
+        let mut path_vertices: Vec<u32> = self.pin_paths.iter().map(|(v, _)| *v).collect();
+        for p in &self.rail_pins {
+            path_vertices.extend(p.vertices.resolve(c.nx, c.nz));
+        }
         let mut pins: Vec<u32> = c
             .pinned
             .iter()
@@ -786,7 +844,12 @@ impl Scene {
             }
             let _ = writeln!(out, "friction = {}", num(collider.friction));
         }
-        if self.pins_from_markers || self.pin_markers.is_some() || !self.pin_paths.is_empty() {
+        crate::rail::file::write_rails(&mut out, &self.rails);
+        if self.pins_from_markers
+            || self.pin_markers.is_some()
+            || !self.pin_paths.is_empty()
+            || !self.rail_pins.is_empty()
+        {
             let _ = writeln!(out, "\n[pins]");
             let _ = writeln!(out, "from_markers = {}", self.pins_from_markers);
             if let Some(m) = &self.pin_markers {
@@ -805,6 +868,7 @@ impl Scene {
                     .collect();
                 let _ = writeln!(out, "path = [{}]", rows.join(", "));
             }
+            crate::rail::file::write_attachments(&mut out, &self.rail_pins);
         }
         Ok(out)
     }
@@ -816,7 +880,7 @@ impl Scene {
     }
 
     /// A world holding the scene's cloth and colliders, and the cloth's id.
-    /// Its kinematic pins follow their paths, and with `pins_from_markers` the pinned
+    /// Its kinematic pins follow their paths and rails, and with `pins_from_markers` the pinned
     /// vertices in the `pin_markers` recording follow it. The scene's effects are not in
     /// it: [`SceneWorld`](crate::scene_world::SceneWorld) adds them and steps with them.
     ///
@@ -844,6 +908,26 @@ impl Scene {
         }
         for (v, path) in &self.pin_paths {
             world.add_kinematic_pin(cloth, *v as usize, path.clone())?;
+        }
+        let rails: Vec<std::sync::Arc<Rail>> = self
+            .rails
+            .iter()
+            .cloned()
+            .map(std::sync::Arc::new)
+            .collect();
+        for p in &self.rail_pins {
+            let Some(rail) = rails.iter().find(|r| r.name == p.rail) else {
+                return Err(ClothError::Scene {
+                    scene: self.name.clone(),
+                    message: format!(
+                        "vertices ride rail \"{}\", which the scene does not name",
+                        p.rail
+                    ),
+                });
+            };
+            for v in p.vertices.resolve(self.cloth.nx, self.cloth.nz) {
+                world.attach_to_rail(cloth, v as usize, std::sync::Arc::clone(rail))?;
+            }
         }
         let loaded;
         let recording = match (markers, &self.pin_markers) {

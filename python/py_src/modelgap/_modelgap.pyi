@@ -1549,7 +1549,8 @@ class ClothMesh:
             vertex: The vertex index.
 
         Raises:
-            DataError: For a vertex past the mesh or an edge that would join two pins.
+            DataError: For a vertex past the mesh. Neighbouring pins are allowed: the edge
+                between them is not a constraint.
         """
 
     @property
@@ -1931,7 +1932,7 @@ class ClothWorld:
 
     def add_cloth(self, mesh: ClothMesh) -> int:
         """Adds a cloth: a particle per vertex, a constraint per edge with its current length
-        as rest length.
+        as rest length (an edge between two pinned vertices is not a constraint).
 
         Args:
             mesh: The mesh (copied).
@@ -1940,8 +1941,8 @@ class ClothWorld:
             The cloth's id (0, 1, …).
 
         Raises:
-            DataError: For a mesh that cannot work (an empty mesh, a zero-length edge, an
-                edge between two pinned vertices, a non-finite position).
+            DataError: For a mesh that cannot work (an empty mesh, a zero-length edge, a
+                non-finite position).
         """
 
     def add_collider(self, collider: Collider) -> int:

@@ -19,10 +19,11 @@ use crate::colouring::ColouredSweep;
 use crate::constraints::DistanceConstraints;
 use crate::contact::{Collider, ColliderId, ContactState};
 use crate::error::{ClothError, Result};
-use crate::kinematic::{KinematicPin, PinPath};
+use crate::kinematic::{KinematicPin, PinMotion, PinPath};
 use crate::mesh::{BuildMesh, ClothMesh};
 use crate::newton::NewtonSolver;
 use crate::particles::{ParticleId, ParticleSet};
+use crate::rail::Rail;
 use crate::solver::{SolverParams, StepReport};
 use crate::strips::StripSweep;
 
@@ -103,11 +104,13 @@ impl ClothWorld {
 
     /// Adds a cloth: a particle per vertex (pinned vertices static), a
     /// distance constraint per edge with its current length as rest length.
+    /// An edge between two pinned vertices is not a constraint (no impulse can
+    /// move either end; kinematic pins keep their distance by their motion), so
+    /// a whole row or border can be pinned.
     ///
     /// # Errors
     /// The mesh's own errors ([`ClothMesh::check`]): an empty mesh, a
-    /// zero-length edge, an edge between two static particles, a non-finite
-    /// position, a vertex out of range.
+    /// zero-length edge, a non-finite position, a vertex out of range.
     pub fn add_cloth(&mut self, cloth: impl BuildMesh) -> Result<ClothId> {
         let mesh: ClothMesh = cloth.build_mesh()?;
         mesh.check()?;
@@ -118,6 +121,10 @@ impl ClothWorld {
         }
         let first_constraint = self.constraints.len();
         for &[a, b] in &mesh.edges {
+            let pinned = |v: u32| mesh.pinned.binary_search(&v).is_ok();
+            if pinned(a) && pinned(b) {
+                continue;
+            }
             let rest = (mesh.positions[a as usize] - mesh.positions[b as usize]).norm();
             self.constraints
                 .push(first as u32 + a, first as u32 + b, rest);
@@ -169,7 +176,8 @@ impl ClothWorld {
 
     /// Makes a pinned vertex of a cloth follow `path` (see [`crate::kinematic`]): it moves
     /// to the path's position at the current time now, and to the path's position at the
-    /// end of each step during the step. A vertex that already follows a path gets the new one.
+    /// end of each step during the step. A vertex that already follows a path (or a rail)
+    /// gets the new one.
     ///
     /// # Errors
     ///
@@ -181,19 +189,48 @@ impl ClothWorld {
         vertex: usize,
         path: PinPath,
     ) -> Result<ParticleId> {
+        let particle = self.pinned_particle(cloth, vertex)?;
+        self.particles.positions[particle.index()] = path.at(self.time);
+        self.set_motion(particle, PinMotion::Path(path));
+        Ok(particle)
+    }
+
+    /// Makes a pinned vertex of a cloth ride `rail` (see [`crate::rail`]): it keeps its
+    /// offset in the rail's frame from where it is now, so attaching does not move it. A
+    /// vertex that already follows a path or a rail rides this one instead.
+    ///
+    /// # Errors
+    ///
+    /// [`ClothError::UnknownCloth`], [`ClothError::VertexOutOfRange`],
+    /// [`ClothError::NotPinned`] when the vertex is dynamic.
+    pub fn attach_to_rail(
+        &mut self,
+        cloth: ClothId,
+        vertex: usize,
+        rail: std::sync::Arc<Rail>,
+    ) -> Result<ParticleId> {
+        let particle = self.pinned_particle(cloth, vertex)?;
+        let local = rail.local(&self.particles.positions[particle.index()], self.time);
+        self.set_motion(particle, PinMotion::Rail { rail, local });
+        Ok(particle)
+    }
+
+    fn pinned_particle(&self, cloth: ClothId, vertex: usize) -> Result<ParticleId> {
         let particle = self.particle(cloth, vertex)?;
-        let i = particle.index();
-        if !self.particles.is_static(i) {
-            return Err(ClothError::NotPinned { vertex });
+        if self.particles.is_static(particle.index()) {
+            Ok(particle)
+        } else {
+            Err(ClothError::NotPinned { vertex })
         }
-        self.particles.positions[i] = path.at(self.time);
-        self.particles.velocities[i] = Vector3::zeros();
-        let pin = KinematicPin { particle, path };
+    }
+
+    fn set_motion(&mut self, particle: ParticleId, motion: PinMotion) {
+        self.particles.velocities[particle.index()] = Vector3::zeros();
+        let pin = KinematicPin { particle, motion };
         match self.kinematic.iter_mut().find(|k| k.particle == particle) {
             Some(slot) => *slot = pin,
             None => self.kinematic.push(pin),
         }
-        Ok(particle)
     }
 
     /// The kinematic pins, in the order added.

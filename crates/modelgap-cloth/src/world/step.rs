@@ -108,7 +108,7 @@ impl ClothWorld {
             });
         }
         for pin in &self.kinematic {
-            ws.pred[pin.particle.index()] = pin.path.at(t_end);
+            ws.pred[pin.particle.index()] = pin.motion.at(t_end);
         }
         ws.free.clone_from(&ws.pred);
     }
@@ -314,7 +314,7 @@ impl ClothWorld {
         }
         for pin in &self.kinematic {
             let i = pin.particle.index();
-            let end = pin.path.at(t_end);
+            let end = pin.motion.at(t_end);
             ps.velocities[i] = (end - ps.positions[i]) / h;
             ps.positions[i] = end;
         }
