@@ -305,3 +305,177 @@ fn explain_fits_candidates_jointly_with_the_free_parameters() {
     assert!((back.param("R").unwrap() - 1.0).abs() < 0.02);
     assert!(text.contains("coulomb"), "{text}");
 }
+
+/// A first-order node: `C1 ė = b u − e / R1`, the effort measured. Only the time constant
+/// `R1 C1` and the gain `b R1` show in the output: with all three free, one direction is
+/// undetermined.
+const NODE: &str = r#"name = "node"
+[parameters]
+b = { value = 1.0, unit = "A/V", free = true, min = 0.1, max = 10.0 }
+R1 = { value = 1.0, unit = "Ohm", free = true, min = 0.1, max = 10.0 }
+C1 = { value = 1.0, unit = "F", free = true, min = 0.1, max = 10.0 }
+[inputs]
+u = { default = 0.0, unit = "V" }
+[[elements]]
+name = "drive"
+kind = "Sf"
+flow = "b * u"
+[[elements]]
+name = "n"
+kind = "0"
+[[elements]]
+name = "C"
+kind = "C"
+parameter = "C1"
+[[elements]]
+name = "R"
+kind = "R"
+parameter = "R1"
+[[bonds]]
+from = "drive"
+to = "n"
+[[bonds]]
+from = "n"
+to = "C"
+[[bonds]]
+from = "n"
+to = "R"
+[[outputs]]
+name = "e"
+effort = "n"
+unit = "V"
+"#;
+
+/// The node at b = 0.5, R1 = 3, C1 = 2 (τ = 6 s, gain 1.5), driven by a staircase, with
+/// AR(1) noise.
+fn node_recording() -> Recording {
+    let mut truth = modelgap::bond::file::read_model(NODE).unwrap();
+    for (name, v) in [("b", 0.5), ("R1", 3.0), ("C1", 2.0)] {
+        truth.set_param(name, v).unwrap();
+    }
+    let t: Vec<f64> = (0..1200).map(|k| 0.05 * k as f64).collect();
+    let u: Vec<f64> = t
+        .iter()
+        .map(|&t| [1.0, 3.0, -1.0, 2.0, 0.5][((t / 12.0) as usize) % 5])
+        .collect();
+    let inputs = Inputs::new().with(
+        "u",
+        Drive::Sampled {
+            t: t.clone(),
+            values: u.clone(),
+            hold: Hold::Zero,
+        },
+    );
+    let run = simulate(&truth, &inputs, &t, &SimOptions::default()).unwrap();
+    let noise = coloured_noise(t.len(), 0.01, 0.7, 3);
+    let y: Vec<f64> = (run.output("e").unwrap().iter().zip(&noise))
+        .map(|(a, b)| a + b)
+        .collect();
+    Recording::new(t, vec![Signal::new("u", u), Signal::new("e", y)]).unwrap()
+}
+
+/// A prior closes the direction the data cannot see: without one, the three values are not
+/// all determined; with a datasheet's `C1 = 2 ± 0.05 F` every value is placed, near the
+/// truth, with a finite ±, and C1's ± is no wider than its prior's.
+#[test]
+fn a_prior_places_what_the_data_cannot_see() {
+    let rec = node_recording();
+    let model = modelgap::bond::BondModel::new(modelgap::bond::file::read_model(NODE).unwrap());
+    let cal = calibrate(&model, &rec, &CalibrationOptions::default()).unwrap();
+    assert!(
+        cal.values.iter().any(
+            |v| v.std_error.is_none() || v.std_error.is_some_and(|se| se > 0.5 * v.value.abs())
+        ),
+        "without a prior one direction is undetermined: {:?}",
+        cal.values
+    );
+
+    let with_prior = NODE.replace(
+        "C1 = { value = 1.0, unit = \"F\", free = true, min = 0.1, max = 10.0 }",
+        "C1 = { value = 1.0, unit = \"F\", free = true, min = 0.1, max = 10.0, prior = { mean = 2.0, std = 0.05 } }",
+    );
+    assert_ne!(with_prior, NODE);
+    let g = modelgap::bond::file::read_model(&with_prior).unwrap();
+    // The prior is part of the file: written and read back.
+    let text = modelgap::bond::file::write_model(&g);
+    assert!(text.contains("prior = { mean = 2"), "{text}");
+    assert_eq!(modelgap::bond::file::read_model(&text).unwrap(), g);
+    let model = modelgap::bond::BondModel::new(g);
+    let cal = calibrate(&model, &rec, &CalibrationOptions::default()).unwrap();
+    for (name, truth) in [("b", 0.5), ("R1", 3.0), ("C1", 2.0)] {
+        let v = cal.values.iter().find(|v| v.name == name).unwrap();
+        let se = v
+            .std_error
+            .unwrap_or_else(|| panic!("{name} not determined: {v:?}"));
+        assert!(
+            (v.value - truth).abs() < 0.1 * truth,
+            "{name}: {} ± {se}, truth {truth}",
+            v.value
+        );
+        assert!(se < 0.1 * truth, "{name}: ± {se}");
+    }
+    let c1 = cal.values.iter().find(|v| v.name == "C1").unwrap();
+    assert!(c1.prior.is_some());
+    assert!(c1.std_error.unwrap() <= 0.05 * 1.01, "{c1:?}");
+    assert!(cal.rms_after[0].1 < 0.02, "{:?}", cal.rms_after);
+}
+
+/// A wrong but wide prior does not move what the data determine: with b and C1 held, R1's
+/// fit is the data's whatever a loose prior says.
+#[test]
+fn a_loose_prior_yields_to_the_data() {
+    let rec = node_recording();
+    let held = NODE
+        .replace(
+            "b = { value = 1.0, unit = \"A/V\", free = true, min = 0.1, max = 10.0 }",
+            "b = { value = 0.5, unit = \"A/V\" }",
+        )
+        .replace(
+            "C1 = { value = 1.0, unit = \"F\", free = true, min = 0.1, max = 10.0 }",
+            "C1 = { value = 2.0, unit = \"F\" }",
+        );
+    let loose = held.replace(
+        "R1 = { value = 1.0, unit = \"Ohm\", free = true, min = 0.1, max = 10.0 }",
+        "R1 = { value = 1.0, unit = \"Ohm\", free = true, min = 0.1, max = 10.0, prior = { mean = 6.0, std = 10.0 } }",
+    );
+    assert_ne!(loose, held);
+    let fit_r1 = |text: &str| {
+        let model = modelgap::bond::BondModel::new(modelgap::bond::file::read_model(text).unwrap());
+        let cal = calibrate(&model, &rec, &CalibrationOptions::default()).unwrap();
+        cal.values[0].value
+    };
+    let (alone, with_prior) = (fit_r1(&held), fit_r1(&loose));
+    assert!((alone - 3.0).abs() < 0.05, "R1 = {alone}");
+    assert!(
+        (with_prior - alone).abs() < 0.01 * alone,
+        "{alone} -> {with_prior}"
+    );
+}
+
+#[test]
+fn bad_priors_name_the_parameter_and_the_line() {
+    for (from, to, expected) in [
+        (
+            "max = 10.0 }\nC1",
+            "max = 10.0, prior = { mean = 1.0, std = 0.0 } }\nC1",
+            "std",
+        ),
+        (
+            "max = 10.0 }\nC1",
+            "max = 10.0, prior = { mean = 1.0, sd = 0.1 } }\nC1",
+            "sd",
+        ),
+        (
+            "R1 = { value = 1.0, unit = \"Ohm\", free = true, min = 0.1, max = 10.0 }",
+            "R1 = { value = 1.0, unit = \"Ohm\", prior = { mean = 1.0, std = 0.1 } }",
+            "free = true",
+        ),
+    ] {
+        assert!(NODE.contains(from), "{from}");
+        let message = modelgap::bond::file::read_model(&NODE.replacen(from, to, 1))
+            .expect_err(to)
+            .to_string();
+        assert!(message.contains(expected), "{to}: {message}");
+        assert!(message.contains("line 4"), "{to}: {message}");
+    }
+}

@@ -277,7 +277,15 @@ fn fix_writes_a_model_file_whose_error_is_lower() {
     let text = ok(&[
         "fix", "--model", "dc-motor", "--data", &data, "--out", &out, "--report", &report,
     ]);
-    assert!(text.contains("added: brush/contact voltage drop"), "{text}");
+    // The drive never reverses, so a dead zone in it takes off the same voltage as a contact
+    // drop: either may be added, and then the other is named as indistinguishable here.
+    let flat = text.split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(
+        flat.contains("added: brush/contact voltage drop")
+            || (flat.contains("added: a dead zone in armature voltage source")
+                && flat.contains("cannot tell it from: brush/contact voltage drop")),
+        "{text}"
+    );
     assert!(text.contains("error before → after"), "{text}");
     assert!(Path::new(&report).join("report.html").exists());
     let model = std::fs::read_to_string(&out).unwrap();

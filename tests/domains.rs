@@ -156,9 +156,10 @@ fn explained(model: &str, rec: &Recording) -> modelgap::Explanation {
 }
 
 #[test]
-fn a_hidden_square_root_leak_is_named_leakage_from_its_tank() {
-    // A leak through a small hole: flow ∝ √level (the candidate is linear in the level).
-    let truth = with_outflow("tank1", "hole", "2e-4 * sqrt(max(e, 0))");
+fn a_hidden_porous_leak_is_named_leakage_from_its_tank() {
+    // Seepage through a porous wall: flow ∝ level^1.15 (the candidate is linear in the level,
+    // the orifice a square root).
+    let truth = with_outflow("tank1", "seep", "1.5e-4 * max(e, 0)^1.15");
     let rec = record(
         &truth,
         "Q",
@@ -176,6 +177,59 @@ fn a_hidden_square_root_leak_is_named_leakage_from_its_tank() {
     let best = &ex.chosen[0].candidate;
     assert_eq!(best.id, "leak@tank1", "chose {} ({})", best.id, best.name);
     assert!(best.name.starts_with("leakage from"), "{}", best.name);
+}
+
+#[test]
+fn a_hidden_valve_with_a_turbulent_law_is_named_an_orifice_of_its_tank() {
+    // A drain valve whose flow goes as level^0.55 (a real valve's exponent, not the
+    // candidate's square root; the leak is linear).
+    let truth = with_outflow("tank1", "drain", "2.2e-4 * max(e, 0)^0.55");
+    let rec = record(
+        &truth,
+        "Q",
+        &[1e-3, 3e-3, 0.5e-3, 2e-3],
+        900.0,
+        &["h1", "h2"],
+        0.002,
+    );
+    let ex = explained(TANKS, &rec);
+    let best = &ex.chosen.first().expect("an effect is chosen").candidate;
+    assert_eq!(
+        best.id, "orifice@tank1",
+        "chose {} ({})",
+        best.id, best.name
+    );
+    assert!(best.name.contains("orifice"), "{}", best.name);
+    assert_eq!(best.params[0].unit, "m^3/s/m^0.5");
+}
+
+#[test]
+fn a_hidden_pump_dead_band_is_named_a_dead_zone_of_the_pump() {
+    // The pump delivers nothing below 0.7 l/s of command, with a soft knee (softplus of
+    // width 0.05 l/s): not the candidate's sharp kink.
+    let truth = TANKS.replace(
+        "flow = \"Q\"",
+        "flow = \"5e-5 * ln(1 + exp((Q - 7e-4) / 5e-5))\"",
+    );
+    assert_ne!(truth, TANKS);
+    let rec = record(
+        &truth,
+        "Q",
+        &[1e-3, 3e-3, 0.5e-3, 2e-3, 1.5e-3],
+        900.0,
+        &["h1", "h2"],
+        0.002,
+    );
+    let ex = explained(TANKS, &rec);
+    let best = ex.chosen.first().expect("an effect is chosen");
+    assert_eq!(
+        best.candidate.id, "deadzone@pump",
+        "chose {} ({})",
+        best.candidate.id, best.candidate.name
+    );
+    let delta = best.params[0].value;
+    assert!((delta - 7e-4).abs() < 0.1 * 7e-4, "delta = {delta}");
+    assert_eq!(best.params[0].unit, "m^3/s");
 }
 
 #[test]
@@ -287,6 +341,47 @@ fn hidden_convection_is_named_heat_loss_to_ambient_from_the_plate() {
         "{}",
         best.name
     );
+}
+
+#[test]
+fn a_hidden_frame_behind_the_plate_is_named_a_second_thermal_mass() {
+    // The plate sits on a frame (8000 J/K) through a contact whose conductance grows with
+    // the temperature difference (bolted joint, radiation): 8 W/K · (1 + 0.02 ΔT). The
+    // candidate's second mass is behind a linear resistance.
+    let truth = ROOM.replace(
+        "[[outputs]]",
+        "[[elements]]\nname = \"bolts\"\nkind = \"R\"\nflow = \"8 * e * (1 + 0.02 * abs(e))\"\n\n\
+         [[elements]]\nname = \"to_frame\"\nkind = \"1\"\n\n\
+         [[elements]]\nname = \"frame\"\nkind = \"0\"\n\n\
+         [[elements]]\nname = \"Cf\"\nkind = \"C\"\neffort = \"q / 8000\"\n\n\
+         [[bonds]]\nfrom = \"plate\"\nto = \"to_frame\"\n\n\
+         [[bonds]]\nfrom = \"to_frame\"\nto = \"bolts\"\n\n\
+         [[bonds]]\nfrom = \"to_frame\"\nto = \"frame\"\n\n\
+         [[bonds]]\nfrom = \"frame\"\nto = \"Cf\"\n\n[[outputs]]",
+    );
+    let rec = record(
+        &truth,
+        "P",
+        &[50.0, 150.0, 20.0, 100.0],
+        3000.0,
+        &["T_plate"],
+        0.05,
+    );
+    let ex = explained(ROOM, &rec);
+    let best = ex.chosen.first().expect("an effect is chosen");
+    assert!(
+        best.candidate.id.starts_with("store@"),
+        "chose {} ({})",
+        best.candidate.id,
+        best.candidate.name
+    );
+    assert!(
+        best.candidate.name.starts_with("a second thermal mass"),
+        "{}",
+        best.candidate.name
+    );
+    assert_eq!(best.params[0].unit, "J/K");
+    assert_eq!(best.params[1].unit, "K/W");
 }
 
 #[test]

@@ -357,6 +357,9 @@ pub struct Parameter {
     /// `Some` when the value is unknown and calibration fits it within
     /// these bounds (`free = true` in a model file).
     pub free: Option<Range>,
+    /// What is known of a free value before the data (`prior = { mean, std }`
+    /// in a model file): calibration weighs it against the recording.
+    pub prior: Option<modelgap_core::Prior>,
 }
 
 /// Bounds of an unknown value that calibration fits: `lower ≤ value ≤ upper`.

@@ -52,6 +52,15 @@ pub enum BondError {
         /// The value given.
         value: f64,
     },
+    /// A prior that cannot be: on a parameter that is not free, or with a
+    /// standard deviation that is not positive and finite.
+    #[error("parameter '{name}': bad prior: {detail}")]
+    BadPrior {
+        /// The parameter.
+        name: String,
+        /// What is wrong.
+        detail: String,
+    },
     /// A name is both a parameter and an input, or otherwise clashes.
     #[error("name '{name}' is used twice: {detail}")]
     NameClash {

@@ -61,7 +61,9 @@
 //!
 //! A parameter marked `free = true` takes bounds `min`/`max`; without them it
 //! may range from 0 to 1000 times its value, its sign kept (a free value of 0
-//! must give both).
+//! must give both). A free parameter may also carry what is known of it
+//! before the data, `prior = { mean = 1.2e-3, std = 1e-4 }` (a datasheet's
+//! tolerance): calibration weighs it against the recording.
 //!
 //! Kinds: `Se Sf MSe MSf R C I TF GY MTF MGY 0 1`. Laws may read another
 //! element's variable as a signal, `Element.x` with `x` one of `e`, `f`,
@@ -181,6 +183,15 @@ struct ParamEntry {
     free: bool,
     min: Option<f64>,
     max: Option<f64>,
+    prior: Option<PriorEntry>,
+}
+
+/// `prior = { mean = 1.2, std = 0.1 }`: a Gaussian prior on a free parameter.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PriorEntry {
+    mean: f64,
+    std: f64,
 }
 
 /// The bounds of a value marked `free`, or an error saying what to write.
@@ -447,7 +458,20 @@ pub fn read_model(src: &str) -> Result<BondGraph> {
         let range = free_range(name, p.value, p.free, p.min, p.max)
             .map_err(|m| ctx.err(span.clone(), format!("parameter {m}")))?;
         g.set_free(name, range)
-            .map_err(|e| ctx.err(span, format!("parameter {e}")))?;
+            .map_err(|e| ctx.err(span.clone(), format!("parameter {e}")))?;
+        if let Some(pr) = &p.prior {
+            let prior = modelgap_core::Prior::new(pr.mean, pr.std).ok_or_else(|| {
+                ctx.err(
+                    span.clone(),
+                    format!(
+                        "parameter '{name}': bad prior: `std` must be positive and finite and `mean` finite (found mean = {}, std = {})",
+                        pr.mean, pr.std
+                    ),
+                )
+            })?;
+            g.set_prior(name, Some(prior))
+                .map_err(|e| ctx.err(span, e.to_string()))?;
+        }
     }
     for (name, i) in &file.inputs {
         let span = i.span();
@@ -618,6 +642,7 @@ pub fn read_model(src: &str) -> Result<BondGraph> {
                     unit: p.unit.clone(),
                     description: p.description.clone(),
                     free: Some(range),
+                    prior: None,
                 },
             ));
         }
@@ -767,6 +792,14 @@ pub fn write_model(g: &BondGraph) -> String {
                     ", free = true, min = {}, max = {}",
                     num(r.lower),
                     num(r.upper)
+                );
+            }
+            if let Some(pr) = p.prior {
+                let _ = write!(
+                    s,
+                    ", prior = {{ mean = {}, std = {} }}",
+                    num(pr.mean),
+                    num(pr.std)
                 );
             }
             s.push_str(" }\n");

@@ -241,6 +241,7 @@ impl BondGraph {
                 unit: unit.to_string(),
                 description: description.to_string(),
                 free: None,
+                prior: None,
             },
         );
         Ok(())
@@ -379,6 +380,34 @@ impl BondGraph {
             })?;
         check_range(name, p.value, range)?;
         p.free = range;
+        if range.is_none() {
+            p.prior = None;
+        }
+        Ok(())
+    }
+
+    /// Gives free parameter `name` a Gaussian prior (`None`: none), which
+    /// calibration weighs against the recording.
+    ///
+    /// # Errors
+    /// [`BondError::UnknownParameter`]; [`BondError::BadPrior`] when the
+    /// parameter is not free (a prior weighs an unknown value).
+    pub fn set_prior(&mut self, name: &str, prior: Option<modelgap_core::Prior>) -> Result<()> {
+        let known = self.params.keys().cloned().collect::<Vec<_>>().join(", ");
+        let p = self
+            .params
+            .get_mut(name)
+            .ok_or_else(|| BondError::UnknownParameter {
+                name: name.to_string(),
+                known,
+            })?;
+        if prior.is_some() && p.free.is_none() {
+            return Err(BondError::BadPrior {
+                name: name.to_string(),
+                detail: "a prior weighs an unknown value; add `free = true`".to_string(),
+            });
+        }
+        p.prior = prior;
         Ok(())
     }
 

@@ -12,6 +12,14 @@
 //! ends on one of its bounds is marked, with no ± (the data did not place
 //! it).
 //!
+//! An unknown may carry a Gaussian [`Prior`] (a datasheet's tolerance, an
+//! earlier calibration): the fit is then run twice — first on the data
+//! alone, to learn how large and how correlated the residual is, then with
+//! one more residual `(value − mean) / std` per prior, weighed so that the
+//! minimum is the posterior's mode and the ± the posterior's (the data's
+//! effective samples, not their count, set how much they outweigh the
+//! prior).
+//!
 //! ```
 //! use modelgap_core::{calibrate, CalibrationOptions, Candidate, EffectKind, EffectParam};
 //! use modelgap_core::{Effect, Model, Prediction, Recording, Signal};
@@ -52,7 +60,7 @@
 //! # Ok::<(), modelgap_core::CoreError>(())
 //! ```
 
-use crate::effect::{Candidate, Effect};
+use crate::effect::{Candidate, Effect, Prior};
 use crate::error::{CoreError, Result};
 use crate::fit::{Cancel, FitOptions, ResidualProblem, Termination, fit};
 use crate::model::Model;
@@ -88,6 +96,9 @@ pub struct FittedValue {
     pub at_bound: Option<&'static str>,
     /// The bounds it was fitted within.
     pub bounds: (f64, f64),
+    /// The prior it was weighed against, if it had one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prior: Option<Prior>,
 }
 
 /// What [`calibrate`] found.
@@ -131,6 +142,11 @@ struct Problem<'a> {
     measured: Vec<&'a [f64]>,
     /// Each output's measured standard deviation: what its residual is divided by.
     sd: Vec<f64>,
+    /// The unknowns with a prior (index into the candidate's parameters).
+    priors: Vec<(usize, Prior)>,
+    /// What a prior's residual `(value − mean) / std` is multiplied by (0:
+    /// priors ignored); see [`prior_weight`].
+    prior_weight: f64,
 }
 
 impl Problem<'_> {
@@ -141,9 +157,14 @@ impl Problem<'_> {
             .residuals_into(&self.names, &self.measured, scale, out)
     }
 
-    /// Unweighted residuals measured − predicted.
+    /// Unweighted residuals measured − predicted (the data's rows only).
     fn raw(&self, values: &[f64], out: &mut [f64]) -> Result<()> {
         self.scaled(values, &vec![1.0; self.names.len()], out)
+    }
+
+    /// The number of data rows (outputs × samples).
+    fn n_data(&self) -> usize {
+        self.names.len() * self.rec.len()
     }
 
     fn rms(&self, raw: &[f64]) -> Vec<(String, f64)> {
@@ -164,11 +185,33 @@ impl ResidualProblem for Problem<'_> {
     }
 
     fn n_residuals(&self) -> usize {
-        self.names.len() * self.rec.len()
+        self.n_data() + self.priors.len()
     }
 
     fn residuals(&self, values: &[f64], out: &mut [f64]) -> Result<()> {
-        self.scaled(values, &self.sd, out)
+        let (data, priors) = out.split_at_mut(self.n_data());
+        self.scaled(values, &self.sd, data)?;
+        for (o, (i, prior)) in priors.iter_mut().zip(&self.priors) {
+            *o = self.prior_weight * (values[*i] - prior.mean) / prior.std;
+        }
+        Ok(())
+    }
+}
+
+/// The weight of the priors' rows against the data's: the log-posterior is
+/// `−Σ r²/(2 s²) · n_eff/n − Σ (θ − μ)²/(2 σ²)` for `n` residuals `r` of
+/// variance `s²` carrying `n_eff` independent samples; multiplied through by
+/// `s² n / n_eff` it is a least-squares cost whose prior rows are
+/// `s √(n / n_eff) (θ − μ) / σ`. `s²` and `n_eff` come from a fit without the
+/// priors. The fit's uncertainties (scaled by `√(n / n_eff)` as without
+/// priors) are then the posterior's.
+fn prior_weight(scaled: &[f64], n_eff: f64) -> f64 {
+    let n = scaled.len() as f64;
+    let s2 = scaled.iter().map(|r| r * r).sum::<f64>() / n.max(1.0);
+    if n_eff > 0.0 && n_eff.is_finite() && s2.is_finite() {
+        (s2 * n / n_eff).sqrt()
+    } else {
+        0.0
     }
 }
 
@@ -218,16 +261,21 @@ pub fn calibrate(
         }
         sd.push(spread);
     }
-    let problem = Problem {
+    let priors: Vec<(usize, Prior)> = (candidate.params.iter().enumerate())
+        .filter_map(|(i, p)| p.prior.map(|pr| (i, pr)))
+        .collect();
+    let mut problem = Problem {
         model,
         rec,
         candidate: &candidate,
         names,
         measured,
         sd,
+        priors: Vec::new(),
+        prior_weight: 0.0,
     };
     let start = candidate.initial();
-    let mut raw = vec![0.0; problem.n_residuals()];
+    let mut raw = vec![0.0; problem.n_data()];
     problem.raw(&start, &mut raw)?;
     let rms_before = problem.rms(&raw);
     let bounds: Vec<(f64, f64)> = candidate
@@ -238,7 +286,7 @@ pub fn calibrate(
     let scales: Vec<f64> = candidate.params.iter().map(|p| p.scale).collect();
     let mut fit_opts = opts.fit.clone();
     fit_opts.name = format!("calibration of {}", model.name());
-    let report = fit(
+    let mut report = fit(
         &problem,
         &start,
         &bounds,
@@ -246,12 +294,32 @@ pub fn calibrate(
         &fit_opts,
         opts.cancel.as_deref(),
     )?;
+    let n = problem.rec.len();
+    let effective = |raw: &[f64]| -> f64 {
+        (0..problem.names.len())
+            .map(|j| effective_sample_size(&raw[j * n..(j + 1) * n]))
+            .sum()
+    };
+    if !priors.is_empty() && report.termination != Termination::Cancelled {
+        // Again with the priors, weighed against the data as the first fit
+        // left them (see `prior_weight`), from where it ended.
+        problem.raw(&report.params, &mut raw)?;
+        let mut scaled = vec![0.0; problem.n_data()];
+        problem.scaled(&report.params, &problem.sd, &mut scaled)?;
+        problem.prior_weight = prior_weight(&scaled, effective(&raw));
+        problem.priors = priors;
+        report = fit(
+            &problem,
+            &report.params,
+            &bounds,
+            &scales,
+            &fit_opts,
+            opts.cancel.as_deref(),
+        )?;
+    }
     problem.raw(&report.params, &mut raw)?;
     let rms_after = problem.rms(&raw);
-    let n = problem.rec.len();
-    let effective_samples: f64 = (0..problem.names.len())
-        .map(|j| effective_sample_size(&raw[j * n..(j + 1) * n]))
-        .sum();
+    let effective_samples = effective(&raw);
     let std_errors = report.scaled_std_errors(effective_samples, raw.len());
     let values = (candidate.params.iter().enumerate())
         .map(|(i, p)| {
@@ -273,6 +341,7 @@ pub fn calibrate(
                     .then_some(std_errors[i]),
                 at_bound,
                 bounds: (p.lower, p.upper),
+                prior: p.prior,
             }
         })
         .collect();

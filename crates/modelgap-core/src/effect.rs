@@ -60,6 +60,30 @@ pub struct EffectParam {
     /// count.
     #[serde(default)]
     pub grid: usize,
+    /// What is known of the value before the data: a Gaussian prior that a
+    /// calibration weighs against the recording (see [`crate::calibrate()`]);
+    /// `None` (the default): only the bounds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prior: Option<Prior>,
+}
+
+/// A Gaussian prior on a parameter: the value is believed to be `mean`
+/// within a standard deviation `std` (same unit) before the data are seen —
+/// a datasheet's tolerance, a previous calibration.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Prior {
+    /// The value believed most likely.
+    pub mean: f64,
+    /// Its standard deviation (positive, finite).
+    pub std: f64,
+}
+
+impl Prior {
+    /// A prior `mean ± std`, or `None` unless both are finite and `std` is
+    /// positive.
+    pub fn new(mean: f64, std: f64) -> Option<Prior> {
+        (mean.is_finite() && std.is_finite() && std > 0.0).then_some(Prior { mean, std })
+    }
 }
 
 impl EffectParam {
@@ -87,6 +111,7 @@ impl EffectParam {
             upper: bounds.1,
             scale,
             grid: 0,
+            prior: None,
         }
     }
 
@@ -95,6 +120,13 @@ impl EffectParam {
     #[must_use]
     pub fn with_grid(mut self, grid: usize) -> EffectParam {
         self.grid = grid;
+        self
+    }
+
+    /// The same parameter with a Gaussian prior (see [`EffectParam::prior`]).
+    #[must_use]
+    pub fn with_prior(mut self, prior: Option<Prior>) -> EffectParam {
+        self.prior = prior;
         self
     }
 

@@ -177,6 +177,12 @@ pub struct RankedCandidate {
     /// Ids of candidates that explain the recording exactly as well with as
     /// many parameters: the same physics said another way.
     pub equivalent: Vec<String>,
+    /// Plain names of other physics the recording cannot tell from this one:
+    /// as many parameters, both significant, scores within the significance
+    /// margin (a dead zone in a drive and a contact drop, while the drive
+    /// never reverses). Empty for a failed fit.
+    #[serde(default)]
+    pub indistinct: Vec<String>,
     /// The model's free parameters as re-fitted jointly with this candidate
     /// (see [`Model::free_parameters`]); `None` when the model has none.
     #[serde(default)]
@@ -796,6 +802,7 @@ fn ranked(target: &Target, f: &Fitted, white: &Whitening, n_eff: f64, n: usize) 
         qualitative: None,
         error: f.error.clone(),
         equivalent: Vec::new(),
+        indistinct: Vec::new(),
         calibration,
     }
 }
@@ -1142,6 +1149,13 @@ fn order_ranking(ranking: &mut Vec<RankedCandidate>, significance: f64) {
         .iter()
         .map(|r| (r.candidate.id.clone(), r.cost, r.candidate.params.len()))
         .collect();
+    let significant: Vec<(String, String, f64, usize)> = (ranking.iter())
+        .filter(|r| r.error.is_none() && r.score > significance)
+        .map(|r| {
+            let (id, name) = (r.candidate.id.clone(), r.candidate.name.clone());
+            (id, name, r.score, r.candidate.params.len())
+        })
+        .collect();
     for r in ranking.iter_mut() {
         if r.error.is_some() {
             continue;
@@ -1155,6 +1169,19 @@ fn order_ranking(ranking: &mut Vec<RankedCandidate>, significance: f64) {
             })
             .map(|(id, _, _)| id.clone())
             .collect();
+        r.indistinct = if r.score > significance {
+            (significant.iter())
+                .filter(|(id, _, score, k)| {
+                    *id != r.candidate.id
+                        && !r.equivalent.contains(id)
+                        && *k == r.candidate.params.len()
+                        && (score - r.score).abs() <= significance
+                })
+                .map(|(_, name, _, _)| name.clone())
+                .collect()
+        } else {
+            Vec::new()
+        };
     }
 }
 
@@ -1450,6 +1477,7 @@ mod tests {
             upper: 10.0,
             scale,
             grid: 0,
+            prior: None,
         }
     }
 

@@ -90,6 +90,7 @@ pub fn candidate_json(ex: &Explanation, r: &RankedCandidate) -> Value {
         "score": finite(r.score),
         "qualitative": r.qualitative,
         "equivalent": r.equivalent,
+        "indistinct": r.indistinct,
         "termination": r.termination.to_string(),
         "error": r.error,
         "calibration": r.calibration.as_ref().map(|c| {

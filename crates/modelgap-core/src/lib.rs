@@ -73,7 +73,7 @@ pub mod story;
 
 pub use calibrate::{Calibration, CalibrationOptions, FittedValue, calibrate};
 pub use compare::{CompareOptions, Comparison, OutputComparison, compare};
-pub use effect::{Candidate, Effect, EffectKind, EffectParam};
+pub use effect::{Candidate, Effect, EffectKind, EffectParam, Prior};
 pub use error::{CoreError, Location, Result};
 pub use explain::{ExplainOptions, Explanation, RankedCandidate, Verdict, explain};
 pub use model::{Model, Prediction};

@@ -239,6 +239,14 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
         if let Some(e) = &r.error {
             let _ = writeln!(s, "      fit failed: {e}");
         }
+        if i == 0 && !r.indistinct.is_empty() {
+            let _ = writeln!(
+                s,
+                "      this recording cannot tell it from: {} (as many parameters, scores within \
+                 the significance margin)",
+                r.indistinct.join("; ")
+            );
+        }
     }
     if ex.ranked.iter().take(top).any(|r| r.qualitative.is_some()) {
         let _ = writeln!(

@@ -8,8 +8,9 @@ use super::edit::bad;
 use super::scales::Scales;
 use super::tag::Tag;
 use super::{
-    Brush, Calibration, Cogging, Coulomb, Coupling, Declared, Deviation, Factor, Fault, Faulted,
-    Inertia, Inflow, Junction, Leak, Load, Node, Overflow, Saturation, Stiffness, Viscous,
+    Brush, Calibration, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault,
+    Faulted, Inertia, Inflow, Junction, Leak, Load, Node, Orifice, Overflow, Saturation, Stiffness,
+    Store, Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::BondGraph;
@@ -48,6 +49,12 @@ pub enum BondEffect {
     Inflow(Inflow),
     /// `overflow@<node>`: outflow above a threshold.
     Overflow(Overflow),
+    /// `orifice@<node>`: turbulent outflow through an orifice (√ of the effort).
+    Orifice(Orifice),
+    /// `store@<node>`: a second storage behind a resistance.
+    Store(Store),
+    /// `deadzone@<source>`: a dead zone in what a driven source imposes.
+    DeadZone(DeadZone),
     /// `declared:<name>`: an effect the model file declares.
     Declared(Declared),
     /// `calibration`: the graph's free parameters and initial states (never
@@ -80,6 +87,9 @@ from_kind!(
     Leak,
     Inflow,
     Overflow,
+    Orifice,
+    Store,
+    DeadZone,
     Declared,
     Calibration
 );
@@ -172,6 +182,27 @@ impl BondEffect {
             Tag::Leak => Some(BondEffect::Leak(Leak { node: node()? })),
             Tag::Inflow => Some(BondEffect::Inflow(Inflow { node: node()? })),
             Tag::Overflow => Some(BondEffect::Overflow(Overflow { node: node()? })),
+            Tag::Orifice => Some(BondEffect::Orifice(Orifice::at(node()?).ok_or_else(
+                || {
+                    bad(
+                        c,
+                        "",
+                        format!("'{target}' is not a hydraulic or pneumatic node"),
+                    )
+                },
+            )?)),
+            Tag::Store => Some(BondEffect::Store(Store { node: node()? })),
+            Tag::DeadZone => {
+                let d = g.find(target).and_then(|id| DeadZone::at(g, id));
+                let d = d.ok_or_else(|| {
+                    bad(
+                        c,
+                        "",
+                        format!("the model has no source '{target}' driven by an input"),
+                    )
+                })?;
+                Some(BondEffect::DeadZone(d))
+            }
             Tag::Declared => Some(BondEffect::Declared(
                 Declared::named(g, target).ok_or_else(|| {
                     bad(c, "", format!("the model declares no candidate '{target}'"))
@@ -209,6 +240,9 @@ impl BondEffect {
             BondEffect::Leak(k) => k,
             BondEffect::Inflow(k) => k,
             BondEffect::Overflow(k) => k,
+            BondEffect::Orifice(k) => k,
+            BondEffect::Store(k) => k,
+            BondEffect::DeadZone(k) => k,
             BondEffect::Declared(k) => k,
             BondEffect::Calibration(k) => k,
         }
@@ -233,6 +267,9 @@ impl BondEffect {
             | BondEffect::Leak(_)
             | BondEffect::Inflow(_)
             | BondEffect::Overflow(_)
+            | BondEffect::Orifice(_)
+            | BondEffect::Store(_)
+            | BondEffect::DeadZone(_)
             | BondEffect::Declared(_)
             | BondEffect::Calibration(_) => None,
         }
@@ -284,6 +321,9 @@ impl BondEffect {
             Tag::Leak => Leak::vanishing_values(c),
             Tag::Inflow => Inflow::vanishing_values(c),
             Tag::Overflow => Overflow::vanishing_values(c),
+            Tag::Orifice => Orifice::vanishing_values(c),
+            Tag::Store => Store::vanishing_values(c),
+            Tag::DeadZone => DeadZone::vanishing_values(c),
         }
     }
 }

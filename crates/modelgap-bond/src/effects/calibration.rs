@@ -40,13 +40,16 @@ impl Calibration {
         let mut params = Vec::new();
         for (name, p) in g.params() {
             if let Some(r) = p.free {
-                params.push(EffectParam::new(
-                    name,
-                    &p.unit,
-                    p.value,
-                    (r.lower, r.upper),
-                    scale(p.value, r),
-                ));
+                params.push(
+                    EffectParam::new(
+                        name,
+                        &p.unit,
+                        p.value,
+                        (r.lower, r.upper),
+                        scale(p.value, r),
+                    )
+                    .with_prior(p.prior),
+                );
             }
         }
         for (element, i) in g.initial() {

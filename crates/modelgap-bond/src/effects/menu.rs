@@ -7,8 +7,8 @@ use super::bond_effect::BondEffect;
 use super::def::EffectDef;
 use super::scales::Scales;
 use super::{
-    Brush, Cogging, Coulomb, Coupling, Declared, Deviation, Factor, Fault, Inertia, Inflow, Leak,
-    Load, Overflow, Saturation, Stiffness, Viscous,
+    Brush, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault, Inertia,
+    Inflow, Leak, Load, Orifice, Overflow, Saturation, Stiffness, Store, Viscous,
 };
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
@@ -46,7 +46,13 @@ use crate::graph::{BondGraph, ElementId};
 /// - On each storage node (a 0-junction with a C, any domain; the words
 ///   follow the C's unit: hydraulic, thermal, electrical or generic):
 ///   `leak@<n>` (`f = G e`, `G` ≥ 0), `inflow@<n>` (a constant `Q`, either
-///   sign) and `overflow@<n>` (`f = k_o max(e − e_max, 0)`, `e_max` on a grid).
+///   sign), `overflow@<n>` (`f = k_o max(e − e_max, 0)`, `e_max` on a grid),
+///   `store@<n>` (a second storage `C2` behind a resistance `R2`: a second
+///   thermal mass, a hydraulic compliance; adds a state) and, on hydraulic
+///   and pneumatic nodes, `orifice@<n>` (`f = a sign(e) √|e|`, `a` ≥ 0).
+/// - On each source whose value names an input, in any domain:
+///   `deadzone@<source>` (the value `v` becomes `sign(v) max(|v| − δ, 0)`,
+///   `δ` from 0 to the largest value the source imposed).
 /// - Each effect the model file declares (`[[candidates]]`): `declared:<name>`.
 /// - For each electrical I with a linear law: `saturation@<I>`
 ///   (`f = p / L · (1 + a_sat p²)`, `a_sat` ≥ 0 in 1/Wb², scale `0.1 / p_peak²`
@@ -112,9 +118,16 @@ pub fn offered(g: &BondGraph) -> Vec<BondEffect> {
                 .into_iter()
                 .map(|k| (k.node.id, k.into())),
         )
+        .chain(
+            Orifice::offers(g)
+                .into_iter()
+                .map(|k| (k.node.id, k.into())),
+        )
+        .chain(Store::offers(g).into_iter().map(|k| (k.node.id, k.into())))
         .collect();
     on_nodes.sort_by_key(|(id, _)| *id);
     out.extend(on_nodes.into_iter().map(|(_, e)| e));
+    out.extend(of::<DeadZone>(g));
     out.extend(of::<Declared>(g));
     out
 }

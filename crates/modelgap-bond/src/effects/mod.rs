@@ -55,7 +55,10 @@
 //!   [`brush`](Brush); on an I: [`saturation`](Saturation); on a C, in any
 //!   domain: [`stiffness`](Stiffness) (a cubic term); on storage nodes
 //!   ([`Node`]: a 0-junction with a C, any domain): [`leak`](Leak),
-//!   [`inflow`](Inflow), [`overflow`](Overflow);
+//!   [`inflow`](Inflow), [`overflow`](Overflow), [`store`](Store) (a second
+//!   storage behind a resistance: a second thermal mass, a hydraulic
+//!   compliance), and on hydraulic ones [`orifice`](Orifice) (√Δp outflow);
+//! - on a source an input drives, in any domain: [`deadzone`](DeadZone);
 //! - declared by the model file (`[[candidates]]`): [`declared`](Declared);
 //! - never on the menu: [`calibration`](Calibration), the graph's own unknowns
 //!   (free parameters and initial states) that calibration fits.
@@ -74,6 +77,7 @@ mod calibration;
 mod cogging;
 mod coulomb;
 mod coupling;
+mod deadzone;
 mod declared;
 mod def;
 mod deviation;
@@ -88,10 +92,12 @@ mod leak;
 mod load;
 mod menu;
 mod node;
+mod orifice;
 mod overflow;
 mod saturation;
 mod scales;
 mod stiffness;
+mod store;
 mod tag;
 mod viscous;
 
@@ -108,6 +114,7 @@ pub use cogging::Cogging;
 pub(crate) use cogging::is_periodic;
 pub use coulomb::Coulomb;
 pub use coupling::Coupling;
+pub use deadzone::DeadZone;
 pub use declared::Declared;
 pub use def::{EffectDef, QualTarget};
 pub use deviation::Deviation;
@@ -121,10 +128,12 @@ pub use leak::Leak;
 pub use load::Load;
 pub use menu::{candidates, candidates_with, offered};
 pub use node::{Node, NodeKind};
+pub use orifice::Orifice;
 pub use overflow::Overflow;
 pub use saturation::Saturation;
 pub use scales::Scales;
 pub use stiffness::Stiffness;
+pub use store::Store;
 pub use viscous::Viscous;
 
 /// The name of the fault-time parameter of every abrupt-change candidate.

@@ -5,7 +5,7 @@
 use modelgap_core::{Candidate, EffectParam};
 
 use super::edit::ident;
-use super::menu::place;
+use super::menu::{law_value, place};
 use super::scales::Scales;
 use super::tag::Tag;
 use crate::element::{ElementKind, Law};
@@ -60,6 +60,54 @@ impl Node {
         let (e, f) = self.units();
         format!("{f}/{e}")
     }
+
+    /// The unit of a resistance here (effort per flow): `K/W`, `Ohm`,
+    /// `s/m^2` for a level, `Pa s/m^3` for a pressure, `e/f` without units.
+    pub fn resistance_unit(self) -> String {
+        if !self.units_known {
+            return "e/f".to_string();
+        }
+        match self.kind {
+            NodeKind::Hydraulic if self.level => "s/m^2".to_string(),
+            NodeKind::Hydraulic => "Pa s/m^3".to_string(),
+            NodeKind::Thermal => "K/W".to_string(),
+            NodeKind::Electrical => "Ohm".to_string(),
+            NodeKind::Generic => "e/f".to_string(),
+        }
+    }
+
+    /// The unit of a storage capacity here (stored quantity per effort):
+    /// `J/K`, `F`, `m^2` for a level, `m^3/Pa`, `f s/e` without units.
+    pub fn capacity_unit(self) -> String {
+        if !self.units_known {
+            return "f s/e".to_string();
+        }
+        match self.kind {
+            NodeKind::Hydraulic if self.level => "m^2".to_string(),
+            NodeKind::Hydraulic => "m^3/Pa".to_string(),
+            NodeKind::Thermal => "J/K".to_string(),
+            NodeKind::Electrical => "F".to_string(),
+            NodeKind::Generic => "f s/e".to_string(),
+        }
+    }
+
+    /// The node's capacity (stored quantity per unit of effort): its C's
+    /// linear coefficient, else the peak stored quantity over the peak
+    /// effort of the run the scales come from, else 1.
+    pub(super) fn capacity(self, g: &BondGraph, scales: &Scales) -> f64 {
+        if let Law::Linear(c) = &g.element(self.storage).law
+            && let Some(v) = law_value(g, c).filter(|v| v.is_finite() && *v > 0.0)
+        {
+            return v;
+        }
+        let q = scales.state_peak.get(&self.storage).copied().unwrap_or(0.0);
+        let ratio = q / self.effort_peak(scales);
+        if ratio.is_finite() && ratio > 0.0 {
+            ratio
+        } else {
+            1.0
+        }
+    }
 }
 
 /// A 0-junction with a C: where leakage, a constant inflow and an overflow
@@ -76,6 +124,8 @@ pub struct Node {
     /// effort's unit (a tank whose level is read in a sensor's volts): the
     /// domain's physics apply, its SI units are not claimed.
     pub units_known: bool,
+    /// The C that stores at the node.
+    pub storage: ElementId,
 }
 
 impl Node {
@@ -111,6 +161,7 @@ impl Node {
                 kind,
                 level: level && kind == NodeKind::Hydraulic,
                 units_known: of_unit == kind,
+                storage: c,
             });
         }
         Some(Node {
@@ -118,6 +169,7 @@ impl Node {
             kind: of_unit,
             level,
             units_known: true,
+            storage: c,
         })
     }
 

@@ -108,7 +108,7 @@ impl Scales {
         });
         let junctions: Vec<ElementId> = g
             .element_ids()
-            .filter(|&id| g.element(id).kind.is_junction())
+            .filter(|&id| g.element(id).kind.is_junction() || g.element(id).kind.is_source())
             .collect();
         let level = |vars: &BTreeMap<Var, f64>, j, flow| level(g, vars, j, flow);
         if let Some(x) = &steady {
@@ -151,7 +151,7 @@ impl Scales {
     fn measure(&mut self, g: &BondGraph, model: &CompiledModel, run: &Run, typical: bool) {
         let junctions: Vec<ElementId> = g
             .element_ids()
-            .filter(|&id| g.element(id).kind.is_junction())
+            .filter(|&id| g.element(id).kind.is_junction() || g.element(id).kind.is_source())
             .collect();
         let level = |vars: &BTreeMap<Var, f64>, j, flow| level(g, vars, j, flow);
         let n = model.n_states();

@@ -21,12 +21,15 @@ pub(super) enum Tag {
     Leak,
     Inflow,
     Overflow,
+    Orifice,
+    Store,
+    DeadZone,
     Declared,
     Calibration,
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 16] = [
+const PREFIXES: [(Tag, &str); 19] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -41,6 +44,9 @@ const PREFIXES: [(Tag, &str); 16] = [
     (Tag::Leak, "leak@"),
     (Tag::Inflow, "inflow@"),
     (Tag::Overflow, "overflow@"),
+    (Tag::Orifice, "orifice@"),
+    (Tag::Store, "store@"),
+    (Tag::DeadZone, "deadzone@"),
     (Tag::Declared, "declared:"),
     (Tag::Calibration, "calibration"),
 ];
@@ -101,7 +107,7 @@ mod tests {
     fn the_expected_prefixes_read_as_a_list() {
         assert_eq!(
             Tag::expected(),
-            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, stiffness@, leak@, inflow@, overflow@ or declared:"
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@ or declared:"
         );
     }
 }
