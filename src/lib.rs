@@ -76,8 +76,8 @@ pub use modelgap_core::residual::{FailureWindow, NoiseFloor, Residual, ResidualS
 pub use modelgap_core::{
     Calibration, CalibrationOptions, Candidate, CompareOptions, Comparison, CoreError, Effect,
     EffectKind, EffectParam, ExplainOptions, Explanation, Location, Model, OutputComparison,
-    Prediction, RankedCandidate, Recording, Signal, Verdict, calibrate, compare, explain, fit, io,
-    json, judge, math, noise, report, residual, story,
+    Prediction, Prior, RankedCandidate, Recording, Signal, Verdict, calibrate, compare, explain,
+    fit, io, json, judge, math, noise, report, residual, story,
 };
 
 pub use modelgap_bond::BondError;

@@ -28,7 +28,8 @@ pub struct PyCalibration {
 impl PyCalibration {
     /// One dict per unknown, in fit order: ``name``, ``unit``, ``start``, ``value``,
     /// ``std_error`` (``None`` when the data do not determine it), ``at_bound``
-    /// (``"lower"``, ``"upper"`` or ``None``) and ``bounds`` (``(lower, upper)``).
+    /// (``"lower"``, ``"upper"`` or ``None``), ``bounds`` (``(lower, upper)``) and ``prior``
+    /// (``(mean, std)`` or ``None``).
     #[getter]
     fn values(&self, py: Python<'_>) -> PyResult<Vec<Py<PyAny>>> {
         self.inner
@@ -43,6 +44,7 @@ impl PyCalibration {
                 d.set_item("std_error", v.std_error)?;
                 d.set_item("at_bound", v.at_bound)?;
                 d.set_item("bounds", v.bounds)?;
+                d.set_item("prior", v.prior.map(|p| (p.mean, p.std)))?;
                 Ok(d.into_any().unbind())
             })
             .collect()

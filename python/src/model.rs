@@ -41,10 +41,11 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// (the fit's scale, which also sets its finite-difference steps: give it even when the
 /// start value is 0).
 ///
-/// ``EffectParam(name, *, lower, upper, initial=None, scale=None, unit="")``: finite bounds
-/// with ``lower < upper`` (in ``unit``), ``initial`` within them (default their midpoint),
-/// ``scale`` positive (default a tenth of ``upper - lower``). Raises ``DataError`` for
-/// values that break these rules.
+/// ``EffectParam(name, *, lower, upper, initial=None, scale=None, unit="", prior=None)``:
+/// finite bounds with ``lower < upper`` (in ``unit``), ``initial`` within them (default their
+/// midpoint), ``scale`` positive (default a tenth of ``upper - lower``), ``prior`` a Gaussian
+/// ``(mean, std)`` that calibration weighs against the data (a model's free parameters only).
+/// Raises ``DataError`` for values that break these rules.
 #[pyclass(name = "EffectParam", module = "modelgap", frozen, get_all)]
 #[derive(Clone)]
 pub struct PyEffectParam {
@@ -60,12 +61,14 @@ pub struct PyEffectParam {
     upper: f64,
     /// A typical size of the parameter.
     scale: f64,
+    /// A Gaussian prior ``(mean, std)``, or ``None``.
+    prior: Option<(f64, f64)>,
 }
 
 #[pymethods]
 impl PyEffectParam {
     #[new]
-    #[pyo3(signature = (name, *, lower, upper, initial = None, scale = None, unit = ""))]
+    #[pyo3(signature = (name, *, lower, upper, initial = None, scale = None, unit = "", prior = None))]
     fn new(
         name: String,
         lower: f64,
@@ -73,7 +76,16 @@ impl PyEffectParam {
         initial: Option<f64>,
         scale: Option<f64>,
         unit: &str,
+        prior: Option<(f64, f64)>,
     ) -> PyResult<Self> {
+        if let Some((mean, std)) = prior
+            && modelgap::Prior::new(mean, std).is_none()
+        {
+            return Err(data_error(format!(
+                "parameter {name}: prior (mean, std) needs a finite mean and a positive finite \
+                 std, found ({mean}, {std})"
+            )));
+        }
         if !(lower.is_finite() && upper.is_finite() && lower < upper) {
             return Err(data_error(format!(
                 "parameter {name}: bounds must be finite with lower < upper, found [{lower}, {upper}]"
@@ -98,6 +110,7 @@ impl PyEffectParam {
             lower,
             upper,
             scale,
+            prior,
         })
     }
 
@@ -119,6 +132,9 @@ impl From<&PyEffectParam> for EffectParam {
             upper: p.upper,
             scale: p.scale,
             grid: 0,
+            prior: p
+                .prior
+                .and_then(|(mean, std)| modelgap::Prior::new(mean, std)),
         }
     }
 }
@@ -236,6 +252,8 @@ pub struct PythonModel {
     inputs: Vec<String>,
     units: BTreeMap<String, String>,
     candidates: Vec<Candidate>,
+    /// The model's own unknowns (`free_parameters()`), as one calibration candidate.
+    free: Option<Candidate>,
     /// Effects built in (by `with_effects`), passed before the loop's own to `predict`.
     built_in: Vec<Effect>,
     /// The first exception of the user's code that is not a `ModelError`: raised again
@@ -247,7 +265,10 @@ pub struct PythonModel {
 
 impl PythonModel {
     /// Wraps a Python object that has `outputs`, `predict(recording, effects)` and
-    /// `candidates()` (and, optionally, `name`, `inputs` and `unit(output)`).
+    /// `candidates()` (and, optionally, `name`, `inputs`, `unit(output)` and
+    /// `free_parameters()`, the model's own unknowns as `EffectParam`s: `fit` calibrates
+    /// them, passing `predict` an effect of id `calibration` with their values, and explain
+    /// fits every candidate jointly with them).
     ///
     /// # Errors
     /// `TypeError` naming what the object lacks; the exceptions of its `outputs` and
@@ -297,6 +318,31 @@ impl PythonModel {
             })?;
             candidates.push(c.get().inner.clone());
         }
+        let free = if obj.hasattr("free_parameters")? {
+            let listed = obj.call_method0("free_parameters")?;
+            let mut params = Vec::new();
+            for item in listed.try_iter()? {
+                let item = item?;
+                let p = item.cast::<PyEffectParam>().map_err(|_| {
+                    PyTypeError::new_err(format!(
+                        "{name}.free_parameters() must give modelgap.EffectParam objects, found {}",
+                        item.get_type()
+                            .name()
+                            .map_or_else(|_| "?".into(), |n| n.to_string())
+                    ))
+                })?;
+                params.push(EffectParam::from(p.get()));
+            }
+            (!params.is_empty()).then(|| Candidate {
+                id: "calibration".to_string(),
+                name: format!("calibration of {name}"),
+                kind: EffectKind::Calibration,
+                acts_on: name.clone(),
+                params,
+            })
+        } else {
+            None
+        };
         Ok(PythonModel {
             object: obj.clone().unbind(),
             name,
@@ -304,6 +350,7 @@ impl PythonModel {
             inputs,
             units,
             candidates,
+            free,
             built_in: Vec::new(),
             raised: Arc::new(Mutex::new(None)),
             stop: Arc::new(Mutex::new(None)),
@@ -425,6 +472,20 @@ impl Model for PythonModel {
         self.candidates.clone()
     }
 
+    /// The unknowns `free_parameters()` listed, starting where the last calibration built
+    /// in put them (a calibrated model is calibrated again from its own values).
+    fn free_parameters(&self) -> Option<Candidate> {
+        let mut free = self.free.clone()?;
+        if let Some(cal) = (self.built_in.iter().rev()).find(|e| e.candidate.id == free.id) {
+            for p in &mut free.params {
+                if let Some(i) = cal.candidate.params.iter().position(|q| q.name == p.name) {
+                    p.initial = cal.values[i].clamp(p.lower, p.upper);
+                }
+            }
+        }
+        Some(free)
+    }
+
     fn with_effects(&self, effects: &[Effect]) -> Result<Box<dyn Model>, CoreError> {
         let object = Python::attach(|py| self.object.clone_ref(py));
         let mut built_in = self.built_in.clone();
@@ -436,6 +497,7 @@ impl Model for PythonModel {
             inputs: self.inputs.clone(),
             units: self.units.clone(),
             candidates: self.candidates.clone(),
+            free: self.free.clone(),
             built_in,
             raised: Arc::new(Mutex::new(None)),
             stop: Arc::new(Mutex::new(None)),

@@ -155,3 +155,50 @@ def test_load_model_gives_the_kind_of_class_the_file_or_name_holds(tmp_path) -> 
     motor.simulate(np.linspace(0, 0.1, 101)).save(path)
     rec = modelgap.load_recording(path, motor)
     assert "omega" in rec.names
+
+
+class RCFree(RC):
+    """The RC circuit with its resistance unknown: ``free_parameters()`` lists it (with a
+    datasheet's prior when given), and ``predict`` reads it from the ``calibration`` effect."""
+
+    name = "rc-free"
+
+    def __init__(self, prior: tuple[float, float] | None = None) -> None:
+        super().__init__(R=5e3)
+        self.prior = prior
+
+    def free_parameters(self) -> Sequence[EffectParam]:
+        return [EffectParam("R", lower=1e3, upper=1e5, initial=5e3, scale=1e3, unit="Ohm", prior=self.prior)]
+
+    def predict(self, recording: Recording, effects: Sequence[Effect]) -> Mapping[str, npt.ArrayLike]:
+        R = self.R
+        for e in effects:
+            if e.id == "calibration":
+                R = e.values["R"]
+        inner = RC(R=R, C=self.C)
+        return inner.predict(recording, [e for e in effects if e.id != "calibration"])
+
+
+def test_a_python_model_marks_its_own_unknowns_and_fit_calibrates_them() -> None:
+    rec = recording_with_leak(0.0)  # the truth: R = 1e4, C = 1e-4, no leak
+    cal = modelgap.fit(RCFree(), rec)
+    (R,) = cal.values
+    assert R["name"] == "R" and R["unit"] == "Ohm" and R["prior"] is None
+    assert abs(R["value"] - 1e4) < 0.02 * 1e4, R
+    assert R["std_error"] is not None and R["std_error"] < 0.02 * 1e4, R
+    assert cal.rms_after["v"] < 0.2 * cal.rms_before["v"]
+    # Explain calibrates first and fits candidates jointly with R: the hidden leak is found,
+    # not absorbed into R.
+    leaky = recording_with_leak(2e-5)
+    ex = modelgap.explain(RCFree(), leaky)
+    assert ex.chosen and ex.chosen[0].id == "leakage", ex.text()
+    # A prior is reported and weighed: a tight wrong one pulls R towards it.
+    cal_prior = modelgap.fit(RCFree(prior=(8e3, 1.0)), rec)
+    (Rp,) = cal_prior.values
+    assert Rp["prior"] == (8e3, 1.0)
+    assert Rp["value"] < R["value"] - 500.0, (Rp, R)
+
+
+def test_a_bad_prior_is_refused() -> None:
+    with pytest.raises(modelgap.DataError, match="prior"):
+        EffectParam("R", lower=1.0, upper=2.0, prior=(1.5, 0.0))

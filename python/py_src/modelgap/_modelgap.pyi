@@ -628,7 +628,13 @@ class Explanation:
     def __eq__(self, value: object, /) -> bool: ...
 
 class _ModelLike(Protocol):
-    """A model written in Python (see ``modelgap.ModelLike``)."""
+    """A model written in Python (see ``modelgap.ModelLike``).
+
+    Optionally it also has ``name``, ``inputs``, ``unit(output)`` and
+    ``free_parameters()``: its own unknowns as a sequence of ``EffectParam`` (with an
+    optional ``prior``). ``fit`` calibrates them, passing ``predict`` an ``Effect`` of id
+    ``calibration`` with their values; ``explain`` fits every candidate jointly with them.
+    """
 
     @property
     def outputs(self) -> Sequence[str]:
@@ -674,6 +680,7 @@ class EffectParam:
         initial: Optional[float] = None,
         scale: Optional[float] = None,
         unit: str = "",
+        prior: Optional[Tuple[float, float]] = None,
     ) -> EffectParam:
         """Defines a parameter the loop fits.
 
@@ -685,10 +692,14 @@ class EffectParam:
             scale: A typical size of the parameter, positive; default a tenth of
                 ``upper - lower``.
             unit: The unit (``Ohm``; ``""`` or ``"1"`` for none).
+            prior: What is known of the value before the data, a Gaussian ``(mean, std)``
+                in ``unit``; ``fit`` weighs it against the recording (for the unknowns a
+                model's ``free_parameters()`` lists).
 
         Raises:
             DataError: For bounds that are not finite or not ordered, an ``initial`` outside
-                them, or a ``scale`` that is not positive and finite.
+                them, a ``scale`` that is not positive and finite, or a ``prior`` whose
+                ``std`` is not positive and finite.
         """
 
     @property
@@ -714,6 +725,10 @@ class EffectParam:
     @property
     def scale(self) -> float:
         """A typical size of the parameter, in ``unit``."""
+
+    @property
+    def prior(self) -> Optional[Tuple[float, float]]:
+        """A Gaussian prior ``(mean, std)`` in ``unit``, or ``None``."""
 
 @final
 class Candidate:
@@ -2708,7 +2723,8 @@ class Calibration:
     def values(self) -> List[Dict[str, Any]]:
         """One dict per unknown, in fit order: ``name``, ``unit``, ``start``, ``value``,
         ``std_error`` (``None`` when the data do not determine it), ``at_bound``
-        (``"lower"``, ``"upper"`` or ``None``) and ``bounds`` (``(lower, upper)``)."""
+        (``"lower"``, ``"upper"`` or ``None``), ``bounds`` (``(lower, upper)``) and ``prior``
+        (``(mean, std)`` or ``None``)."""
 
     @property
     def correlation(self) -> List[List[float]]:
@@ -2741,13 +2757,15 @@ def fit(model: _Model, rec: Recording) -> Calibration:
     """Calibrates the model's unknowns jointly, by simulation error on ``rec``.
 
     The unknowns are the parameters marked ``free`` (in the model file, or with
-    ``BondModel.free``) and the free initial states (``[initial]`` in the file). Each
+    ``BondModel.free``) and the free initial states (``[initial]`` in the file), or what a
+    Python model's ``free_parameters()`` lists; a value with a prior is weighed against
+    the data (a fit on the data alone first, then with the prior). Each
     output's residual is divided by the standard deviation of its measurement; standard
     errors are widened for the residual's correlation in time; a value that ends on a
     bound is marked and has no standard error. The GIL is released during the fit.
 
     Args:
-        model: The model (a ``BondModel``).
+        model: The model (a ``BondModel``, or a Python model with ``free_parameters()``).
         rec: A ``Recording`` of the model's inputs and some of its outputs.
 
     Returns:
