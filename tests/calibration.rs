@@ -418,6 +418,24 @@ fn a_prior_places_what_the_data_cannot_see() {
     assert!(c1.prior.is_some());
     assert!(c1.std_error.unwrap() <= 0.05 * 1.01, "{c1:?}");
     assert!(cal.rms_after[0].1 < 0.02, "{:?}", cal.rms_after);
+    // explain calibrates the same way and keeps the prior in every joint fit.
+    let ex = modelgap::explain(&model, &rec, &modelgap::ExplainOptions::default()).unwrap();
+    let mut checked = 0;
+    for r in ex.ranked.iter().filter(|r| r.error.is_none()) {
+        let cal = r
+            .calibration
+            .as_ref()
+            .expect("fitted jointly with the free values");
+        let i = (cal.candidate.params.iter().position(|p| p.name == "C1")).unwrap();
+        assert!(
+            (cal.values[i] - 2.0).abs() < 0.2,
+            "{}: C1 = {}",
+            r.candidate.id,
+            cal.values[i]
+        );
+        checked += 1;
+    }
+    assert!(checked > 0, "{:?}", ex.ranked);
 }
 
 /// A wrong but wide prior does not move what the data determine: with b and C1 held, R1's

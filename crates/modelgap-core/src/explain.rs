@@ -26,7 +26,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::compare::{CompareOptions, Floor, noise_floor, shared_outputs};
-use crate::effect::{Candidate, Effect};
+use crate::effect::{Candidate, Effect, Prior};
 use crate::error::{CoreError, Result};
 use crate::fit::{Cancel, FitOptions, FitReport, ResidualProblem, Termination, fit};
 pub use crate::judge::{FEW_OUTPUTS, at_noise_floor};
@@ -283,6 +283,10 @@ struct Target<'a> {
     /// `initial` values are the calibrated ones), when it has any: every
     /// candidate is fitted jointly with them ([`Target::joint`]).
     calibration: Option<Candidate>,
+    /// What a free parameter's prior residual `(value − mean) / std` is
+    /// multiplied by in every fit (0 until the calibration has measured the
+    /// residual; see [`crate::calibrate()`] for the weighing).
+    prior_weight: f64,
 }
 
 impl Target<'_> {
@@ -435,6 +439,33 @@ struct CandidateProblem<'a> {
     base: &'a [Effect],
     candidate: &'a Candidate,
     fixed: Vec<Option<f64>>,
+    /// The candidate's parameters with a prior (a free parameter of the
+    /// model), by index, when the target weighs priors.
+    priors: Vec<(usize, Prior)>,
+}
+
+impl<'a> CandidateProblem<'a> {
+    fn new(
+        target: &'a Target<'a>,
+        base: &'a [Effect],
+        candidate: &'a Candidate,
+        fixed: Vec<Option<f64>>,
+    ) -> Self {
+        let priors = if target.prior_weight > 0.0 {
+            (candidate.params.iter().enumerate())
+                .filter_map(|(i, p)| p.prior.map(|pr| (i, pr)))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        CandidateProblem {
+            target,
+            base,
+            candidate,
+            fixed,
+            priors,
+        }
+    }
 }
 
 impl CandidateProblem<'_> {
@@ -453,9 +484,10 @@ impl ResidualProblem for CandidateProblem<'_> {
     }
 
     fn n_residuals(&self) -> usize {
-        self.target.n_residuals()
+        self.target.n_residuals() + self.priors.len()
     }
 
+    /// The data's weighted residuals, then one row per prior.
     fn residuals(&self, params: &[f64], out: &mut [f64]) -> Result<()> {
         let full = self.full(params);
         let mut effects: Vec<(&Candidate, &[f64])> = self
@@ -464,7 +496,12 @@ impl ResidualProblem for CandidateProblem<'_> {
             .map(|e| (&e.candidate, e.values.as_slice()))
             .collect();
         effects.push((self.candidate, &full));
-        self.target.residuals(&effects, out)
+        let (data, priors) = out.split_at_mut(self.target.n_residuals());
+        self.target.residuals(&effects, data)?;
+        for (o, (i, prior)) in priors.iter_mut().zip(&self.priors) {
+            *o = self.target.prior_weight * (full[*i] - prior.mean) / prior.std;
+        }
+        Ok(())
     }
 }
 
@@ -685,12 +722,7 @@ fn fit_candidate(
                 for (a, (i, pts)) in grid_axes.iter().enumerate() {
                     fixed[*i] = Some(pts[combo[a]]);
                 }
-                let problem = CandidateProblem {
-                    target,
-                    base,
-                    candidate: &c,
-                    fixed,
-                };
+                let problem = CandidateProblem::new(target, base, &c, fixed);
                 let free_idx: Vec<usize> = (0..c.params.len())
                     .filter(|i| problem.fixed[*i].is_none())
                     .collect();
@@ -706,18 +738,15 @@ fn fit_candidate(
             None => return failed("no grid start could be simulated".to_string()),
         }
     }
-    let problem = CandidateProblem {
-        target,
-        base,
-        candidate: &c,
-        fixed: vec![None; c.params.len()],
-    };
+    let problem = CandidateProblem::new(target, base, &c, vec![None; c.params.len()]);
     match fit(&problem, &start, &bounds, &scales, &fit_opts, cancel) {
         Ok(report) => {
             let mut weighted = vec![0.0; problem.n_residuals()];
             if let Err(e) = problem.residuals(&report.params, &mut weighted) {
                 return failed(e.to_string());
             }
+            // The data's rows only: the priors' are part of the fit, not of the residual.
+            weighted.truncate(target.n_residuals());
             Fitted {
                 candidate: c.clone(),
                 values: report.params.clone(),
@@ -885,11 +914,28 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         sigma: floors.iter().map(|f| f.sigma).collect(),
         floors,
         calibration: None,
+        prior_weight: 0.0,
     };
     // The model's free parameters: calibrated first, then fitted again with
     // every candidate (the verdict is about the calibrated model).
     if let Some(cal) = model.free_parameters() {
-        let f = fit_candidate(&target, &[], &cal, opts);
+        let mut f = fit_candidate(&target, &[], &cal, opts);
+        if f.error.is_none() && cal.params.iter().any(|p| p.prior.is_some()) {
+            // Priors weighed as calibration weighs them: against the residual the data
+            // alone leave, then calibrated again with them.
+            let n = f.weighted.len() as f64;
+            let s2 = f.weighted.iter().map(|r| r * r).sum::<f64>() / n.max(1.0);
+            let n_eff = target.n_eff(&f.weighted);
+            if n_eff > 0.0 && s2.is_finite() {
+                target.prior_weight = (s2 * n / n_eff).sqrt();
+                let mut again = cal.clone();
+                for (p, v) in again.params.iter_mut().zip(&f.values) {
+                    p.initial = *v;
+                    p.grid = 0;
+                }
+                f = fit_candidate(&target, &[], &again, opts);
+            }
+        }
         match &f.error {
             Some(e) => warnings.push(format!(
                 "the free parameters could not be calibrated ({e}): candidates are fitted \
