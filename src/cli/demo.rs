@@ -141,7 +141,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
             (a.min(*x), b.max(*x))
         });
     out.push_str(&format!(
-        "1. The recording ({DEMO_PATH}, bundled): {} samples of {} over {} s.\n   \
+        "1. The recording ({DEMO_PATH}, bundled):\n   {} samples of {} over {} s.\n   \
          The voltage V steps between {} V and {} V: the motor starts, reverses, slows down.\n   \
          The model is the built-in {}. The recording hides a physical effect the model lacks,\n   \
          plus a sensor lag and noise that no candidate models.\n\n",
@@ -159,7 +159,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     out.push_str(&indent(&story.comparison_text(&before)));
 
     // 3. What is missing.
-    super::print(&out)?;
+    super::print(&modelgap::story::wrap_text(&out, 99))?;
     out.clear();
     let ex = loaded.explain(false)?;
     stop_if_interrupted(story, &ex, false, TOP)?;
@@ -209,7 +209,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         "   On your own data: `modelgap explain --model dc-motor --data your.csv`, then\n   \
          `modelgap fix --model dc-motor --data your.csv --out fixed.toml` (see `modelgap help`).\n",
     );
-    super::print(&out)?;
+    super::print(&modelgap::story::wrap_text(&out, 99))?;
 
     // 6. Cloth.
     if !args.skip_cloth {
@@ -230,10 +230,11 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     out.push_str(&indent(&table7_text(&rows)));
     out.push_str(&indent(&super::table7::summary(&rows)));
     out.push_str(
-        "\nNext: `modelgap bond table7 --json`, `modelgap bond diagnose --model dc-motor --data \
-         examples/data/dc_motor_r_fault.csv --steady-start`.\n",
+        "\nNext: `modelgap bond table7 --json`,\n  \
+         `modelgap bond diagnose --model dc-motor --data examples/data/dc_motor_r_fault.csv \
+         --steady-start`.\n",
     );
-    super::print(&out)
+    super::print(&modelgap::story::wrap_text(&out, 99))
 }
 
 /// The bundled cloth scene and markers, loaded: the scene as a model and the markers as its
@@ -282,7 +283,7 @@ fn cloth_story(dir: &Path) -> anyhow::Result<()> {
     );
     let before = loaded.compare(loaded.model.as_ref())?;
     out.push_str(&indent(&story.comparison_text(&before)));
-    super::print(&out)?;
+    super::print(&modelgap::story::wrap_text(&out, 99))?;
     out.clear();
 
     let ex = loaded.explain(false)?;
@@ -327,10 +328,11 @@ fn cloth_story(dir: &Path) -> anyhow::Result<()> {
          Foxglove's 3D panel:\n   ");
     out.push_str(&report_line(&page));
     out.push_str(&format!(
-        "   On your own markers: `modelgap explain --model {CLOTH_SCENE_PATH} --data your.csv`, then\n   \
+        "   On your own markers:\n   \
+         `modelgap explain --model {CLOTH_SCENE_PATH} --data your.csv`, then\n   \
          `modelgap fix --model {CLOTH_SCENE_PATH} --data your.csv --out fixed.toml`.\n"
     ));
-    super::print(&out)
+    super::print(&modelgap::story::wrap_text(&out, 99))
 }
 
 /// What the demo prints once the chosen effects are built in: each effect added, the error
@@ -371,18 +373,19 @@ fn truth_text<'a>(
             continue;
         };
         for (p, truth) in found.params.iter().zip(values) {
-            let uncertainty = if p.std_error.is_finite() {
-                format!(" ± {}", num(p.std_error))
-            } else {
-                String::new()
+            let unit = modelgap::story::unit_suffix(&p.unit);
+            let found = match &p.at_bound {
+                Some(bound) => format!("{}{unit} (at its {bound} bound)", num(p.value)),
+                None if p.std_error.is_finite() => {
+                    format!("{} ± {}{unit}", num(p.value), num(p.std_error))
+                }
+                None => format!("{}{unit}", num(p.value)),
             };
-            let unit = unit_suffix(&p.unit);
             s.push_str(&format!(
                 "   The truth hidden in the recording ({maker}): {} = {}{unit};\n   \
-                 explain, not told it, found {}{uncertainty}{unit}.\n",
+                 explain, not told it, found {found}.\n",
                 p.name,
                 num(*truth),
-                num(p.value),
             ));
         }
     }
@@ -400,14 +403,6 @@ fn indent(text: &str) -> String {
             }
         })
         .collect()
-}
-
-/// " unit", or nothing for a dimensionless parameter (unit "1" or none).
-fn unit_suffix(unit: &str) -> String {
-    match unit {
-        "" | "1" => String::new(),
-        u => format!(" {u}"),
-    }
 }
 
 #[cfg(test)]

@@ -170,18 +170,18 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
     );
     let width = cal.values.iter().map(|v| v.name.len()).max().unwrap_or(0);
     for v in &cal.values {
+        let unit = modelgap::story::unit_suffix(&v.unit);
         let value = match (v.std_error, v.at_bound) {
-            (_, Some(bound)) => format!("{} (at its {bound} bound; not determined)", num(v.value)),
-            (Some(se), None) => format!("{} ± {}", num(v.value), num(se)),
+            (_, Some(bound)) => format!("{}{unit} (at its {bound} bound)", num(v.value)),
+            (Some(se), None) => format!("{} ± {}{unit}", num(v.value), num(se)),
             (None, None) => format!(
-                "{} (not determined: the outputs cannot tell it from the other unknowns)",
+                "{}{unit} (not determined: the outputs cannot tell it from the other unknowns)",
                 num(v.value)
             ),
         };
         out.push_str(&format!(
-            "  {:width$}  {value} {}   (from {})\n",
+            "  {:width$}  {value}   (from {}{unit})\n",
             v.name,
-            v.unit,
             num(v.start),
         ));
     }

@@ -302,18 +302,7 @@ pub(super) fn what_to_add(
 
 /// A fitted effect in one line: name, where it acts, parameters ± standard error.
 pub fn effect_line(r: &RankedCandidate) -> String {
-    let params: Vec<String> = r
-        .params
-        .iter()
-        .map(|p| {
-            let text = modelgap::story::param_text(p);
-            if p.std_error.is_finite() {
-                text
-            } else {
-                format!("{text} (at a bound)")
-            }
-        })
-        .collect();
+    let params: Vec<String> = r.params.iter().map(modelgap::story::param_text).collect();
     // Names often say where already: "Coulomb friction on the shaft (1m)".
     if r.candidate.name.contains(&r.candidate.acts_on) {
         format!("{}: {}", r.candidate.name, params.join(", "))

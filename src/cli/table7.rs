@@ -72,9 +72,11 @@ pub fn run(args: &Table7Args) -> anyhow::Result<()> {
 pub fn summary(rows: &[modelgap::bond::table7::Table7Row]) -> String {
     let n = rows.len();
     format!(
-        "\n{} of {n} minimal sets contain the true fault; {} equal the paper's; residual behaviour agrees in {} of {n}.\n\
-         Where they differ, see docs/table7.md: the engine separates k from R (their onset signatures differ in the\n\
-         sign of omega's first move) and cannot separate m from the converter's own resistance rf with i and omega only.\n",
+        "\n{} of {n} minimal sets contain the true fault; {} equal the paper's; residual behaviour \
+         agrees in {} of {n}.\n\
+         Where they differ, see docs/table7.md: the engine separates k from R (their onset\n\
+         signatures differ in the sign of omega's first move) and cannot separate m from the\n\
+         converter's own resistance rf with i and omega only.\n",
         rows.iter().filter(|r| r.contains_fault).count(),
         rows.iter().filter(|r| r.same_set).count(),
         rows.iter().filter(|r| r.same_behaviour).count(),

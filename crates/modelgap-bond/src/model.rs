@@ -27,16 +27,18 @@ use std::borrow::Cow;
 use std::fmt::Write as _;
 
 use modelgap_core::residual::Threshold;
-use modelgap_core::{Candidate, CoreError, Effect, Model, Prediction, Recording};
+use modelgap_core::{Candidate, CoreError, Effect, Model, Prediction, QualitativeCheck, Recording};
 
 use crate::compiled::CompiledModel;
 use crate::diagnosis::{DiagnosisOptions, diagnose};
+use crate::effects::QualTarget;
 use crate::effects::{self, BondEffect};
 use crate::element::{ElementKind, Law, Scheduled, ScheduledChange};
 use crate::error::{BondError, Result};
-use crate::fault_tree::first_hypothesis_set;
+use crate::fault_tree::{FaultTree, Hypothesis, first_hypothesis_set};
 use crate::file::write_model;
 use crate::graph::BondGraph;
+use crate::qual::Qual;
 use crate::simulate::{Hold, Inputs, ParamChange, Run, SimOptions, simulate, simulate_compiled};
 
 /// Relative tolerance of the adaptive solvers in [`BondModel`]'s predictions.
@@ -555,6 +557,18 @@ impl Model for BondModel {
     /// junction's inertia (either sign). `None` for the others, when the
     /// diagnosis cannot run, or when it detects nothing.
     fn qualitative_agreement(&self, rec: &Recording, candidate: &Candidate) -> Option<bool> {
+        self.qualitative_check(rec, candidate).map(|c| c.agrees)
+    }
+
+    /// [`qualitative_agreement`](Model::qualitative_agreement) with its
+    /// reason: which outputs left their bands first and which way, the
+    /// parameter deviations their fault trees share, and the deviation the
+    /// candidate would show as.
+    fn qualitative_check(
+        &self,
+        rec: &Recording,
+        candidate: &Candidate,
+    ) -> Option<QualitativeCheck> {
         let targets = BondEffect::from_candidate(candidate, &self.graph)
             .ok()?
             .qualitative_signature(&self.graph)?;
@@ -570,11 +584,70 @@ impl Model for BondModel {
             ..DiagnosisOptions::default()
         };
         let d = diagnose(&self.graph, rec, &opts).ok()?;
-        d.detected_at?;
+        let detected_at = d.detected_at?;
         let set = first_hypothesis_set(&d.trees);
-        Some(targets.iter().any(|(param, sign)| {
+        let agrees = targets.iter().any(|(param, sign)| {
             set.iter()
                 .any(|h| h.param == *param && sign.is_none_or(|s| h.deviation == s))
-        }))
+        });
+        Some(QualitativeCheck {
+            agrees,
+            reason: qualitative_reason(&d.trees, &set, &targets, detected_at, agrees),
+        })
     }
+}
+
+/// The plain-words reason of a qualitative check: "measured i above the model
+/// and omega below it first (from 0.13 s); their fault trees point at R+, k-;
+/// this effect would show as beta+, which is not among them".
+fn qualitative_reason(
+    trees: &[FaultTree],
+    set: &std::collections::BTreeSet<Hypothesis>,
+    targets: &[QualTarget],
+    detected_at: f64,
+    agrees: bool,
+) -> String {
+    // The residual is measured − model: + means the measurement ran above the model.
+    let moved: Vec<String> = trees
+        .iter()
+        .filter(|t| t.qual != Qual::Zero)
+        .enumerate()
+        .map(|(k, t)| {
+            let way = if t.qual == Qual::Plus {
+                "above"
+            } else {
+                "below"
+            };
+            let what = if k == 0 { "the model" } else { "it" };
+            format!("{} {way} {what}", t.output)
+        })
+        .collect();
+    let moved = match moved.as_slice() {
+        [] => "no output deviated clearly".to_owned(),
+        [one] => format!("measured {one}"),
+        [rest @ .., last] => format!("measured {} and {last}", rest.join(", ")),
+    };
+    let shows_as: Vec<String> = targets
+        .iter()
+        .map(|(p, sign)| match sign {
+            Some(s) => format!("{p}{s}"),
+            None => format!("{p}+ or {p}-"),
+        })
+        .collect();
+    let shows_as = shows_as.join(" or ");
+    let pointed = if set.is_empty() {
+        "their fault trees share no parameter deviation".to_owned()
+    } else {
+        let names: Vec<String> = set.iter().map(ToString::to_string).collect();
+        format!("their fault trees point at {}", names.join(", "))
+    };
+    let verdict = if agrees {
+        "which is among them"
+    } else {
+        "which is not among them"
+    };
+    format!(
+        "{moved} first (from {} s); {pointed}; this effect would show as {shows_as}, {verdict}",
+        modelgap_core::report::format_number(detected_at)
+    )
 }

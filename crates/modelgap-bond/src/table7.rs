@@ -202,29 +202,59 @@ pub fn table7(opts: &Table7Options) -> Result<Vec<Table7Row>> {
     Ok(rows)
 }
 
-/// The table as text, engine beside paper.
+/// The table as text, engine beside paper, each column as wide as its widest cell (so the
+/// table stays under 100 characters).
 pub fn table7_text(rows: &[Table7Row]) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "{:<7} {:<10} {:<18} {:<22} {:<12} | {:<14} {:<12} | agree",
-        "fault", "detected", "deviations", "engine set", "residual", "paper set", "residual"
-    );
+    let header = [
+        "fault",
+        "detected",
+        "deviations",
+        "engine set",
+        "residual",
+        "paper set",
+        "residual",
+        "agree",
+    ];
+    let mut cells: Vec<[String; 8]> = vec![header.map(str::to_string)];
     for r in rows {
-        let _ = writeln!(
-            s,
-            "{:<7} {:<10} {:<18} {:<22} {:<12} | {:<14} {:<12} | {}{}",
-            r.fault,
+        cells.push([
+            r.fault.to_string(),
             r.detected_at
                 .map_or("never".to_string(), |t| format!("{t:.3} s")),
             r.deviations.join(" "),
             format!("{{{}}}", r.hypotheses.join(", ")),
-            r.behaviour,
+            r.behaviour.to_string(),
             format!("{{{}}}", r.paper_parameters.join(", ")),
-            r.paper_behaviour,
-            if r.same_set { "set" } else { "-" },
-            if r.same_behaviour { " behaviour" } else { "" },
-        );
+            r.paper_behaviour.to_string(),
+            format!(
+                "{}{}",
+                if r.same_set { "set" } else { "-" },
+                if r.same_behaviour { " behaviour" } else { "" }
+            ),
+        ]);
+    }
+    let mut width = [0usize; 8];
+    for row in &cells {
+        for (w, c) in width.iter_mut().zip(row) {
+            *w = (*w).max(c.chars().count());
+        }
+    }
+    let mut s = String::new();
+    for row in &cells {
+        let mut line = String::new();
+        for (k, c) in row.iter().enumerate() {
+            let sep = match k {
+                0 => "",
+                5 | 7 => " | ",
+                _ => " ",
+            };
+            line.push_str(sep);
+            line.push_str(c);
+            if k < 7 {
+                line.push_str(&" ".repeat(width[k] - c.chars().count()));
+            }
+        }
+        let _ = writeln!(s, "{}", line.trim_end());
     }
     s
 }

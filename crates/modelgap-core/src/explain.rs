@@ -149,8 +149,27 @@ pub struct FittedParam {
     /// Fitted value.
     pub value: f64,
     /// Standard error, scaled for the residual's effective sample size
-    /// (infinite when the parameter sits at a bound).
+    /// (infinite when the parameter sits at a bound, or the data do not
+    /// determine it).
     pub std_error: f64,
+    /// `Some("lower")` or `Some("upper")` when the fit ended on that bound of
+    /// the candidate's parameter: the value is then a limit the fit ran into,
+    /// not an estimate, and has no standard error.
+    #[serde(default)]
+    pub at_bound: Option<String>,
+}
+
+/// Which bound of `[lower, upper]` a fitted `value` sits on, if any, within
+/// a relative slack of 1e-9 of the parameter's scale (or the value).
+pub(crate) fn bound_hit(value: f64, lower: f64, upper: f64, scale: f64) -> Option<&'static str> {
+    let slack = 1e-9 * scale.abs().max(value.abs());
+    if value <= lower + slack {
+        Some("lower")
+    } else if value >= upper - slack {
+        Some("upper")
+    } else {
+        None
+    }
 }
 
 /// A candidate after its fit.
@@ -172,6 +191,10 @@ pub struct RankedCandidate {
     /// Whether the model's qualitative reasoning (fault trees, signatures)
     /// agrees, when it has any.
     pub qualitative: Option<bool>,
+    /// Why the qualitative reasoning agrees or disagrees, in plain words
+    /// (empty when the model gives no reason).
+    #[serde(default)]
+    pub qualitative_reason: String,
     /// Why the fit failed, if it did (the candidate then ranks last).
     pub error: Option<String>,
     /// Ids of candidates that explain the recording exactly as well with as
@@ -796,13 +819,20 @@ fn ranked(target: &Target, f: &Fitted, white: &Whitening, n_eff: f64, n: usize) 
         .iter()
         .zip(&f.values)
         .enumerate()
-        .map(|(i, (p, v))| FittedParam {
-            name: p.name.clone(),
-            unit: p.unit.clone(),
-            value: *v,
-            std_error: f.report.as_ref().map_or(f64::INFINITY, |r| {
-                r.std_errors.get(i).copied().unwrap_or(f64::INFINITY) * scale_se
-            }),
+        .map(|(i, (p, v))| {
+            let at_bound = bound_hit(*v, p.lower, p.upper, p.scale);
+            FittedParam {
+                name: p.name.clone(),
+                unit: p.unit.clone(),
+                value: *v,
+                std_error: match (at_bound, f.report.as_ref()) {
+                    (None, Some(r)) => {
+                        r.std_errors.get(i).copied().unwrap_or(f64::INFINITY) * scale_se
+                    }
+                    _ => f64::INFINITY,
+                },
+                at_bound: at_bound.map(str::to_owned),
+            }
         })
         .collect();
     RankedCandidate {
@@ -829,6 +859,7 @@ fn ranked(target: &Target, f: &Fitted, white: &Whitening, n_eff: f64, n: usize) 
             .as_ref()
             .map_or(Termination::Stalled, |r| r.termination),
         qualitative: None,
+        qualitative_reason: String::new(),
         error: f.error.clone(),
         equivalent: Vec::new(),
         indistinct: Vec::new(),
@@ -1128,7 +1159,10 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
     }
     // Qualitative evidence for the top of the ranking (it costs a diagnosis each).
     for r in ranking.iter_mut().take(5) {
-        r.qualitative = model.qualitative_agreement(rec, &r.candidate);
+        if let Some(check) = model.qualitative_check(rec, &r.candidate) {
+            r.qualitative = Some(check.agrees);
+            r.qualitative_reason = check.reason;
+        }
     }
     Ok(Explanation {
         model: model.name(),

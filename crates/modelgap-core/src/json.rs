@@ -71,6 +71,7 @@ pub fn candidate_json(ex: &Explanation, r: &RankedCandidate) -> Value {
                 "unit": p.unit,
                 "value": finite(p.value),
                 "std_error": finite(p.std_error),
+                "at_bound": p.at_bound,
             })
         })
         .collect();
@@ -89,6 +90,7 @@ pub fn candidate_json(ex: &Explanation, r: &RankedCandidate) -> Value {
         "rms_after": rms_after,
         "score": finite(r.score),
         "qualitative": r.qualitative,
+        "qualitative_reason": (!r.qualitative_reason.is_empty()).then_some(&r.qualitative_reason),
         "equivalent": r.equivalent,
         "indistinct": r.indistinct,
         "termination": r.termination.to_string(),
@@ -155,6 +157,8 @@ pub fn explanation_json(ex: &Explanation) -> Value {
                 && let Some(r) = ex.ranked.iter().find(|r| r.candidate.id == c.candidate.id)
             {
                 v["qualitative"] = json!(r.qualitative);
+                v["qualitative_reason"] =
+                    json!((!r.qualitative_reason.is_empty()).then_some(&r.qualitative_reason));
             }
             v
         })

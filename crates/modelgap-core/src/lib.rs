@@ -76,5 +76,5 @@ pub use compare::{CompareOptions, Comparison, OutputComparison, compare};
 pub use effect::{Candidate, Effect, EffectKind, EffectParam, Prior};
 pub use error::{CoreError, Location, Result};
 pub use explain::{ExplainOptions, Explanation, RankedCandidate, Verdict, explain};
-pub use model::{Model, Prediction};
+pub use model::{Model, Prediction, QualitativeCheck};
 pub use recording::{Recording, Signal};

@@ -204,4 +204,33 @@ pub trait Model: Send + Sync {
         let _ = (rec, candidate);
         None
     }
+
+    /// [`qualitative_agreement`](Model::qualitative_agreement) with its
+    /// reason in plain words (which outputs deviated which way, which
+    /// parameters the diagnosis points at, and what the candidate would look
+    /// like), for the report and the text beside a "signature agrees" or
+    /// "signature disagrees" tag. By default the agreement alone with an
+    /// empty reason; models with qualitative reasoning override this.
+    fn qualitative_check(
+        &self,
+        rec: &Recording,
+        candidate: &Candidate,
+    ) -> Option<QualitativeCheck> {
+        self.qualitative_agreement(rec, candidate)
+            .map(|agrees| QualitativeCheck {
+                agrees,
+                reason: String::new(),
+            })
+    }
+}
+
+/// The result of a model's qualitative check of a candidate
+/// ([`Model::qualitative_check`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct QualitativeCheck {
+    /// Whether the qualitative diagnosis points at the candidate.
+    pub agrees: bool,
+    /// Why, in plain words ("i rose and omega fell first; the fault trees
+    /// point at R+, L+; viscous friction would show as beta+"); may be empty.
+    pub reason: String,
 }

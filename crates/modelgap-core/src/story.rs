@@ -10,26 +10,88 @@ use crate::error::Result;
 use crate::explain::{Explanation, FittedParam, Verdict};
 use crate::recording::Recording;
 use crate::report::{
-    ComparisonChannels, RankingBar, Report, ResidualPlot, SeriesPlot, format_number,
-    write_comparison_mcap, write_html,
+    ComparisonChannels, RankingBar, Report, SeriesPlot, format_number, write_comparison_mcap,
+    write_html,
 };
 
 fn num(v: f64) -> String {
     format_number(v)
 }
 
-/// A fitted parameter as `name = value ± std_error unit` (no `±` when the
-/// error is not determined, e.g. at a bound).
-pub fn param_text(p: &FittedParam) -> String {
-    // A dimensionless parameter (unit "1" or none) is printed bare.
-    let unit = match p.unit.as_str() {
+/// A unit as written after a number: `" N m"`, or nothing for a dimensionless
+/// quantity (unit `"1"` or none), so no number reads "0.8 1".
+pub fn unit_suffix(unit: &str) -> String {
+    match unit.trim() {
         "" | "1" => String::new(),
         u => format!(" {u}"),
-    };
-    if p.std_error.is_finite() {
-        format!("{} = {} ± {}{unit}", p.name, num(p.value), num(p.std_error))
-    } else {
-        format!("{} = {}{unit}", p.name, num(p.value))
+    }
+}
+
+/// The widest line the loop's text output holds (characters); longer lines are wrapped by
+/// [`wrap_text`]. Under 100 with room for the demo's indent of 3.
+pub const TEXT_WIDTH: usize = 96;
+
+/// Wraps every line of `text` longer than `width` characters at spaces, continuing it
+/// indented 4 spaces deeper than the line began; shorter lines (and the alignment spaces in
+/// them) are kept as they are. A single word longer than `width` stays whole.
+///
+/// # Example
+/// ```
+/// # use modelgap_core::story::wrap_text;
+/// let text = "  fails at 0.1–0.5 s, 0.7–0.9 s, 1.2–1.4 s\nshort\n";
+/// assert_eq!(wrap_text(text, 28), "  fails at 0.1–0.5 s,\n      0.7–0.9 s, 1.2–1.4 s\nshort\n");
+/// ```
+pub fn wrap_text(text: &str, width: usize) -> String {
+    let mut out = String::with_capacity(text.len() + text.len() / 16);
+    for line in text.split_inclusive('\n') {
+        let (body, newline) = match line.strip_suffix('\n') {
+            Some(b) => (b, "\n"),
+            None => (line, ""),
+        };
+        if body.chars().count() <= width {
+            out.push_str(line);
+            continue;
+        }
+        let lead = body.len() - body.trim_start_matches(' ').len();
+        let hang = " ".repeat((lead + 4).min(width / 2));
+        let mut words = body[lead..].split(' ');
+        // The first word always starts the line; the text after the indent is not empty.
+        let mut current = body[..lead].to_owned();
+        current.push_str(words.next().unwrap_or(""));
+        let mut current_len = current.chars().count();
+        for word in words {
+            let len = word.chars().count();
+            // Empty words are runs of spaces (alignment): kept, never a place to break.
+            if word.is_empty() || current_len + 1 + len <= width {
+                current.push(' ');
+                current.push_str(word);
+                current_len += 1 + len;
+            } else {
+                out.push_str(current.trim_end());
+                out.push('\n');
+                current.clone_from(&hang);
+                current.push_str(word);
+                current_len = hang.len() + len;
+            }
+        }
+        out.push_str(current.trim_end());
+        out.push_str(newline);
+    }
+    out
+}
+
+/// A fitted parameter as `name = value ± std_error unit`; a value the fit
+/// ended on a bound of reads `name = value unit (at its upper bound)`, with no
+/// `±` (it is a limit, not an estimate), and one the data do not determine has
+/// no `±` either.
+pub fn param_text(p: &FittedParam) -> String {
+    let unit = unit_suffix(&p.unit);
+    match &p.at_bound {
+        Some(bound) => format!("{} = {}{unit} (at its {bound} bound)", p.name, num(p.value)),
+        None if p.std_error.is_finite() => {
+            format!("{} = {} ± {}{unit}", p.name, num(p.value), num(p.std_error))
+        }
+        None => format!("{} = {}{unit}", p.name, num(p.value)),
     }
 }
 
@@ -104,7 +166,7 @@ pub fn before_after_text(before: &Comparison, after: &Comparison) -> String {
             a.windows.len(),
         ));
     }
-    s
+    wrap_text(&s, TEXT_WIDTH)
 }
 
 /// Where the model fails, output by output, as text.
@@ -191,7 +253,7 @@ pub fn comparison_text(c: &Comparison) -> String {
     {
         let _ = writeln!(s, "warning: {w}");
     }
-    s
+    wrap_text(&s, TEXT_WIDTH)
 }
 
 /// The ranking and the verdict as text.
@@ -212,23 +274,18 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
             .zip(&r.rms_after)
             .map(|(o, v)| format!("{} {}→{}", o.name, num(o.rms_before), num(*v)))
             .collect();
-        let qual = match r.qualitative {
-            Some(true) => "; [signature agrees]",
-            Some(false) => "; [signature disagrees]",
-            None => "",
-        };
-        // Two lines per candidate: names vary in length, and one line of name,
-        // parameters and RMS runs far past a terminal's width.
+        // The score first, so a long name never pushes it out of its column; parameters and
+        // RMS on the next line, wrapped at the text width.
         let _ = writeln!(
             s,
-            "  {:>2}. {:<64} score {:>7}",
+            "  {:>2}. score {:>7}  {}",
             i + 1,
-            r.candidate.name,
-            num(r.score)
+            num(r.score),
+            r.candidate.name
         );
         let _ = writeln!(
             s,
-            "      {}; RMS {}{qual}",
+            "      {}; RMS {}",
             if params.is_empty() {
                 "no parameters".to_string()
             } else {
@@ -236,6 +293,9 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
             },
             rms.join(", ")
         );
+        if let Some(line) = qualitative_line(r) {
+            let _ = writeln!(s, "      {line}");
+        }
         if let Some(e) = &r.error {
             let _ = writeln!(s, "      fit failed: {e}");
         }
@@ -251,8 +311,9 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
     if ex.ranked.iter().take(top).any(|r| r.qualitative.is_some()) {
         let _ = writeln!(
             s,
-            "  [signature agrees/disagrees]: whether the qualitative diagnosis (fault trees and signatures\n  \
-             of the first deviations) points at the candidate's parameter; a hint, not part of the score"
+            "  (signature agrees/disagrees: whether the model's qualitative diagnosis — fault \
+             trees of the outputs' first deviations — points at the candidate; a hint, not part \
+             of the score)"
         );
     }
     if !ex.ranked.is_empty() {
@@ -316,7 +377,21 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
     for w in &ex.warnings {
         let _ = writeln!(s, "warning: {w}");
     }
-    s
+    wrap_text(&s, TEXT_WIDTH)
+}
+
+/// "[signature disagrees] measured i above the model …": the qualitative check of a
+/// ranked candidate with its reason, `None` when the model made none.
+pub fn qualitative_line(r: &crate::explain::RankedCandidate) -> Option<String> {
+    let tag = match r.qualitative? {
+        true => "[signature agrees]",
+        false => "[signature disagrees]",
+    };
+    Some(if r.qualitative_reason.is_empty() {
+        tag.to_string()
+    } else {
+        format!("{tag} {}", r.qualitative_reason)
+    })
 }
 
 /// The HTML report of a comparison, with the explanation and the comparison
@@ -392,6 +467,24 @@ pub fn build_report(
                 c.candidate.name,
                 params.join(", ")
             ));
+            // The qualitative check runs on the ranking; the chosen effect's is there.
+            let checked = ex.ranked.iter().find(|r| r.candidate.id == c.candidate.id);
+            if let Some(r) = checked.filter(|r| r.qualitative.is_some()) {
+                let word = if r.qualitative == Some(true) {
+                    "agrees"
+                } else {
+                    "disagrees"
+                };
+                let why = if r.qualitative_reason.is_empty() {
+                    String::new()
+                } else {
+                    format!(": {}", r.qualitative_reason)
+                };
+                summary.push(format!(
+                    "The model's qualitative diagnosis (fault trees of the outputs' first \
+                     deviations) {word} with it{why}. This is a hint, not part of the score."
+                ));
+            }
         }
     }
     if let Some(a) = after {
@@ -422,19 +515,8 @@ pub fn build_report(
             after: after
                 .and_then(|a| a.output(&o.name))
                 .map(|a| a.predicted.clone()),
-        })
-        .collect();
-    let residuals = before
-        .outputs
-        .iter()
-        .map(|o| ResidualPlot {
-            title: format!("residual of {}", o.name),
-            unit: o.unit.clone(),
-            t: before.t.clone(),
-            before: o.residual.clone(),
-            after: after
-                .and_then(|a| a.output(&o.name))
-                .map(|a| a.residual.clone()),
+            // The residual strip beneath each plot shows the band and the failure windows,
+            // so the page needs no separate residual plots.
             band: o.band,
             windows: o.windows.clone(),
         })
@@ -449,12 +531,20 @@ pub fn build_report(
                 label: r.candidate.name.clone(),
                 value: r.score,
                 highlight: chosen.contains(&r.candidate.id.as_str()),
-                note: r
-                    .params
-                    .iter()
-                    .map(|p| format!("{} = {} {}", p.name, num(p.value), p.unit))
-                    .collect::<Vec<_>>()
-                    .join(", "),
+                note: {
+                    let mut note = r
+                        .params
+                        .iter()
+                        .map(param_text)
+                        .collect::<Vec<_>>()
+                        .join(", ");
+                    // The qualitative check and its reason on a line of their own.
+                    if let Some(q) = qualitative_line(r) {
+                        note.push('\n');
+                        note.push_str(&q);
+                    }
+                    note
+                },
             })
             .collect()
     });
@@ -464,7 +554,7 @@ pub fn build_report(
         verdict,
         table,
         series,
-        residuals,
+        residuals: Vec::new(),
         ranking,
         ranking_unit: "BIC evidence, with a penalty per fitted parameter".to_string(),
         extra_svgs: Vec::new(),
@@ -596,3 +686,181 @@ pub trait Story: Send + Sync {
 pub struct PerOutput;
 
 impl Story for PerOutput {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::compare::{CompareOptions, compare};
+    use crate::effect::{Candidate, EffectKind, EffectParam};
+    use crate::explain::{ExplainOptions, explain};
+    use crate::model::{Model, Prediction};
+    use crate::recording::Signal;
+
+    /// y = sin(2π t) with two candidates: an offset allowed only up to 0.1 (so a hidden
+    /// offset of 0.3 drives its fit onto the bound) and a free dimensionless gain.
+    struct Bounded;
+
+    impl Model for Bounded {
+        fn name(&self) -> String {
+            "bounded".into()
+        }
+        fn outputs(&self) -> Vec<String> {
+            vec!["y".into()]
+        }
+        fn predict_with(
+            &self,
+            rec: &Recording,
+            effects: &[(&Candidate, &[f64])],
+        ) -> Result<Prediction> {
+            let y = rec
+                .t()
+                .iter()
+                .map(|&t| {
+                    let (mut a, mut y) = (1.0, 0.0);
+                    for (c, v) in effects {
+                        match c.id.as_str() {
+                            "offset" => y += v[0],
+                            "gain" => a += v[0],
+                            _ => {}
+                        }
+                    }
+                    y + a * (std::f64::consts::TAU * t).sin()
+                })
+                .collect();
+            Ok(Prediction {
+                names: vec!["y".into()],
+                values: vec![y],
+            })
+        }
+        fn candidates(&self) -> Vec<Candidate> {
+            vec![
+                Candidate {
+                    id: "offset".into(),
+                    name: "a sensor offset, allowed only up to 0.1".into(),
+                    kind: EffectKind::MissingElement,
+                    acts_on: "y".into(),
+                    params: vec![EffectParam::new("offset", "V", 0.0, (0.0, 0.1), 0.05)],
+                },
+                Candidate {
+                    id: "gain".into(),
+                    name: "a gain error of the sensor".into(),
+                    kind: EffectKind::MissingElement,
+                    acts_on: "y".into(),
+                    params: vec![EffectParam::new("gain", "1", 0.0, (-0.5, 0.5), 0.1)],
+                },
+            ]
+        }
+        fn with_effects(&self, _effects: &[Effect]) -> Result<Box<dyn Model>> {
+            Ok(Box::new(Bounded))
+        }
+    }
+
+    fn recording() -> Recording {
+        let t: Vec<f64> = (0..1000).map(|k| f64::from(k) * 1e-3).collect();
+        let mut g = crate::noise::Gaussian::new(3);
+        let y = t
+            .iter()
+            .map(|&t| 0.3 + 1.1 * (std::f64::consts::TAU * t).sin() + 0.01 * g.sample())
+            .collect();
+        Recording::new(t, vec![Signal::new("y", y)]).unwrap()
+    }
+
+    fn param(name: &str, unit: &str, std_error: f64, at_bound: Option<&str>) -> FittedParam {
+        FittedParam {
+            name: name.into(),
+            unit: unit.into(),
+            value: 5.0,
+            std_error,
+            at_bound: at_bound.map(str::to_owned),
+        }
+    }
+
+    #[test]
+    fn a_value_on_a_bound_says_so_and_has_no_uncertainty() {
+        assert_eq!(
+            param_text(&param("R", "Ohm", 0.2, Some("upper"))),
+            "R = 5 Ohm (at its upper bound)"
+        );
+        assert_eq!(param_text(&param("R", "Ohm", 0.2, None)), "R = 5 ± 0.2 Ohm");
+        assert_eq!(
+            param_text(&param("R", "Ohm", f64::INFINITY, None)),
+            "R = 5 Ohm"
+        );
+        // No unit "1" after a dimensionless number.
+        assert_eq!(param_text(&param("C_d", "1", 0.01, None)), "C_d = 5 ± 0.01");
+        assert_eq!(
+            param_text(&param("col", " 1 ", f64::INFINITY, None)),
+            "col = 5"
+        );
+    }
+
+    #[test]
+    fn wrapped_text_keeps_every_word_and_short_lines() {
+        let long = format!(
+            "  {}\n    short line   with  alignment\n{}\n",
+            "word ".repeat(60).trim_end(),
+            "x".repeat(120)
+        );
+        let wrapped = wrap_text(&long, 40);
+        let words = |s: &str| s.split_whitespace().map(str::to_owned).collect::<Vec<_>>();
+        assert_eq!(words(&wrapped), words(&long));
+        for line in wrapped.lines() {
+            let n = line.chars().count();
+            assert!(n <= 40 || !line.trim().contains(' '), "{n}: {line}");
+        }
+        // Lines that fit keep their spaces; continuations are indented deeper.
+        assert!(wrapped.contains("\n    short line   with  alignment\n"));
+        assert!(wrapped.lines().nth(1).unwrap().starts_with("      word"));
+        assert_eq!(wrap_text("a b c\n", 4), "a b\n  c\n");
+    }
+
+    // Issue 16: fits that ended on a bound (beta = 5e-5 at 5× nominal) showed no ± and no
+    // "at its bound"; a dimensionless value read "0.8006 1".
+    #[test]
+    fn explain_flags_a_fit_on_its_bound_in_text_json_and_report() {
+        let rec = recording();
+        let ex = explain(&Bounded, &rec, &ExplainOptions::default()).unwrap();
+        let offset = ex
+            .ranked
+            .iter()
+            .find(|r| r.candidate.id == "offset")
+            .unwrap();
+        let p = &offset.params[0];
+        assert_eq!(p.at_bound.as_deref(), Some("upper"), "{p:?}");
+        assert!(p.std_error.is_infinite());
+        let gain = ex.ranked.iter().find(|r| r.candidate.id == "gain").unwrap();
+        assert_eq!(gain.params[0].at_bound, None, "{:?}", gain.params[0]);
+        assert!(gain.params[0].std_error.is_finite());
+
+        let text = explanation_text(&ex, 10);
+        assert!(
+            text.contains("offset = 0.1 V (at its upper bound)"),
+            "{text}"
+        );
+        assert!(!text.contains("0.1 ±"), "{text}");
+        assert!(text.contains("gain = ") && !text.contains(" 1;"), "{text}");
+        for line in text.lines() {
+            assert!(line.chars().count() <= TEXT_WIDTH, "{line}");
+        }
+
+        let json = crate::json::candidate_json(&ex, offset);
+        assert_eq!(json["params"][0]["at_bound"], "upper");
+        assert!(json["params"][0]["std_error"].is_null(), "{json}");
+        let json = crate::json::candidate_json(&ex, gain);
+        assert!(json["params"][0]["at_bound"].is_null());
+        assert!(json["params"][0]["std_error"].is_number());
+
+        let before = compare(&Bounded, &rec, &CompareOptions::default()).unwrap();
+        let report = build_report(&before, Some(&ex), None);
+        let notes: Vec<&str> = report.ranking.iter().map(|b| b.note.as_str()).collect();
+        assert!(
+            notes.contains(&"offset = 0.1 V (at its upper bound)"),
+            "{notes:?}"
+        );
+        let html = crate::report::render_html(&report);
+        assert!(
+            !html.contains(" 1<") && !html.contains(" 1,"),
+            "unit 1 printed"
+        );
+    }
+}

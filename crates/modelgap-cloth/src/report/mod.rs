@@ -61,7 +61,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use modelgap_core::report::{Report, ResidualPlot, SeriesPlot, format_number, residual_svg};
-use modelgap_core::story::{build_report, param_text, verdict_sentence};
+use modelgap_core::story::{TEXT_WIDTH, build_report, param_text, verdict_sentence, wrap_text};
 use modelgap_core::{Comparison, CoreError, Explanation, Verdict};
 use serde::Serialize;
 
@@ -540,7 +540,7 @@ pub fn comparison_text(c: &ClothComparison, top: usize) -> String {
             .iter()
             .map(|m| format!("m{} {}", m.id, format_number(m.rms * 1e3)))
             .collect();
-        for (k, chunk) in all.chunks(8).enumerate() {
+        for (k, chunk) in all.chunks(6).enumerate() {
             let head = if k == 0 {
                 "  per marker (RMS, mm):"
             } else {
@@ -578,7 +578,7 @@ pub fn comparison_text(c: &ClothComparison, top: usize) -> String {
             shown.join(", ")
         );
     }
-    s
+    wrap_text(&s, TEXT_WIDTH)
 }
 
 /// The RMS over markers of the 3D error that per-coordinate RMS values leave, from the
@@ -628,12 +628,13 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
     for (i, r) in ex.ranked.iter().take(top).enumerate() {
         let params: Vec<String> = r.params.iter().map(param_text).collect();
         let left = marker_rms(names(), r.rms_after.iter().copied());
+        // The score first, so a long name never pushes it out of its column.
         let _ = writeln!(
             s,
-            "  {:>2}. {:<64} score {:>7}",
+            "  {:>2}. score {:>7}  {}",
             i + 1,
-            r.candidate.name,
-            format_number(r.score)
+            format_number(r.score),
+            r.candidate.name
         );
         let _ = writeln!(
             s,
@@ -697,7 +698,7 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
     for w in &ex.warnings {
         let _ = writeln!(s, "warning: {w}");
     }
-    s
+    wrap_text(&s, TEXT_WIDTH)
 }
 
 /// The error before → after, over all markers and for the worst markers before.
@@ -738,7 +739,7 @@ pub fn before_after_text(before: &ClothComparison, after: &ClothComparison) -> S
     if !worst.is_empty() {
         let _ = writeln!(s, "  worst markers before: {}", worst.join(", "));
     }
-    s
+    wrap_text(&s, TEXT_WIDTH)
 }
 
 /// The HTML report of a cloth comparison: the core page (verdict, ranking) with the table,
@@ -835,7 +836,17 @@ pub fn cloth_report(
         table.push(row);
     }
     report.table = table;
-    // The worst marker's three coordinates against the model.
+    // The worst marker's three coordinates against the model, in mm like every length on
+    // the page (the table, the summary, the error map).
+    let to_mm = |v: &[f64]| v.iter().map(|x| x * 1e3).collect::<Vec<f64>>();
+    let windows_mm = |ws: &[modelgap_core::residual::FailureWindow]| {
+        ws.iter()
+            .map(|w| modelgap_core::residual::FailureWindow {
+                peak: w.peak * 1e3,
+                ..*w
+            })
+            .collect::<Vec<_>>()
+    };
     report.series = cb
         .worst_markers(1)
         .iter()
@@ -845,13 +856,15 @@ pub fn cloth_report(
                 let o = before.output(&name)?;
                 Some(SeriesPlot {
                     title: format!("{name}: the worst marker's {axis} coordinate"),
-                    unit: "m".to_owned(),
+                    unit: "mm".to_owned(),
                     t: before.t.clone(),
-                    measured: o.measured.clone(),
-                    before: o.predicted.clone(),
+                    measured: to_mm(&o.measured),
+                    before: to_mm(&o.predicted),
                     after: after
                         .and_then(|a| a.0.output(&name))
-                        .map(|a| a.predicted.clone()),
+                        .map(|a| to_mm(&a.predicted)),
+                    band: o.band * 1e3,
+                    windows: windows_mm(&o.windows),
                 })
             })
         })
@@ -859,18 +872,18 @@ pub fn cloth_report(
     report.residuals = Vec::new();
     let over_time = ResidualPlot {
         title: "marker error over time (RMS over markers of the 3D distance)".to_owned(),
-        unit: "m".to_owned(),
+        unit: "mm".to_owned(),
         t: cb.t.clone(),
-        before: cb.error_over_time.clone(),
-        after: ca.map(|a| a.error_over_time.clone()),
-        band: cb.band,
+        before: to_mm(&cb.error_over_time),
+        after: ca.map(|a| to_mm(&a.error_over_time)),
+        band: cb.band * 1e3,
         windows: cb
             .windows
             .iter()
             .map(|w| modelgap_core::residual::FailureWindow {
                 start: w.start,
                 end: w.end,
-                peak: w.peak,
+                peak: w.peak * 1e3,
                 peak_time: w.peak_time,
                 sign: 1,
             })

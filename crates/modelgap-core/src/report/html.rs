@@ -5,9 +5,11 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::format::{escape, format_number, with_unit};
-use super::svg::{ranking_svg, residual_svg, series_svg};
+use super::ranking::ranking_svg;
+use super::svg::{residual_svg, series_svg, zoom_window};
 use super::{Report, ResidualPlot, SeriesPlot};
 use crate::error::Result;
+use crate::residual::FailureWindow;
 
 /// The most failure windows listed by time in a residual plot's caption.
 const MAX_LISTED_WINDOWS: usize = 6;
@@ -95,9 +97,12 @@ pub fn render_html(report: &Report) -> String {
 
     if !report.series.is_empty() {
         page.push_str(
-            "<h2>Measured against the model</h2>\n<p class=\"intro\">Each plot lays the model's \
-             prediction over the measurement. Where the red line (the model as it was) leaves \
-             the dark grey one (the measurement), the model is missing something.</p>\n",
+            "<h2>Measured against the model</h2>\n<p class=\"intro\">Each figure lays the \
+             model's prediction over the measurement. Where the red line (the model as it was) \
+             leaves the dark grey one (the measurement), the model is missing something. The \
+             error is often thinner than a line at full scale, so beneath each plot, on the same \
+             time axis, is the residual measured − model against the band noise alone would \
+             fill, and at the bottom a zoom on the stretch where the error is largest.</p>\n",
         );
         for p in &report.series {
             push_figure(&mut page, &series_svg(p), &series_caption(p));
@@ -262,32 +267,49 @@ fn series_caption(p: &SeriesPlot) -> String {
     } else {
         "Dark grey is the measurement, red the model: look for stretches where they part."
     };
-    format!(
+    let mut text = format!(
         "<b>{title}</b>: {how} {}.",
         before_after_text(before, after, &p.unit)
-    )
+    );
+    let strip = if p.band > 0.0 {
+        format!(
+            " The strip beneath shows measured − model; the grey band (±{}) is what noise \
+             alone would leave.",
+            escape(&with_unit(p.band, &p.unit))
+        )
+    } else {
+        " The strip beneath shows measured − model.".to_owned()
+    };
+    text.push_str(&strip);
+    if !p.windows.is_empty() {
+        text.push_str(" Shaded red and numbered: where the model fails.");
+    }
+    text.push_str(&windows_text(&p.windows, &p.unit, p.band > 0.0));
+    if let Some((a, b)) = zoom_window(p) {
+        let _ = write!(
+            text,
+            " The bottom panel zooms into {}–{} s, where the model's error is largest.",
+            format_number(a),
+            format_number(b)
+        );
+    }
+    text
 }
 
-fn residual_caption(p: &ResidualPlot) -> String {
-    let title = escape(&p.title);
-    if super::validate_residual(p).is_err() {
-        return format!("<b>{title}</b>: this plot could not be drawn (see the notice).");
-    }
-    let mut text = format!(
-        "<b>{title}</b>: the grey band (±{}) is what noise alone would leave; shaded red \
-         windows are where the model fails.",
-        escape(&with_unit(p.band, &p.unit))
-    );
-    match p.windows.len() {
-        0 => text.push_str(" The residual before never leaves the band."),
+/// " 2 failure windows: (1) 0.1–0.5 s, peak 0.3 A at 0.2 s, measured above the model; …."
+/// (with `with_band`) or " The residual before never leaves the band." when there are none.
+fn windows_text(windows: &[FailureWindow], unit: &str, with_band: bool) -> String {
+    let mut text = String::new();
+    match windows.len() {
+        0 if with_band => text.push_str(" The residual before never leaves the band."),
+        0 => {}
         n => {
             let _ = write!(
                 text,
                 " {n} failure window{}: ",
                 if n == 1 { "" } else { "s" }
             );
-            let listed: Vec<String> = p
-                .windows
+            let listed: Vec<String> = windows
                 .iter()
                 .take(MAX_LISTED_WINDOWS)
                 .enumerate()
@@ -302,7 +324,7 @@ fn residual_caption(p: &ResidualPlot) -> String {
                         k + 1,
                         format_number(w.start),
                         format_number(w.end),
-                        escape(&with_unit(w.peak, &p.unit)),
+                        escape(&with_unit(w.peak, unit)),
                         format_number(w.peak_time)
                     )
                 })
@@ -314,6 +336,20 @@ fn residual_caption(p: &ResidualPlot) -> String {
             text.push('.');
         }
     }
+    text
+}
+
+fn residual_caption(p: &ResidualPlot) -> String {
+    let title = escape(&p.title);
+    if super::validate_residual(p).is_err() {
+        return format!("<b>{title}</b>: this plot could not be drawn (see the notice).");
+    }
+    let mut text = format!(
+        "<b>{title}</b>: the grey band (±{}) is what noise alone would leave; shaded red \
+         windows are where the model fails.",
+        escape(&with_unit(p.band, &p.unit))
+    );
+    text.push_str(&windows_text(&p.windows, &p.unit, true));
     let before = rms_finite(&p.before);
     let after = p.after.as_deref().and_then(rms_finite);
     let _ = write!(text, " {}", before_after_text(before, after, &p.unit));

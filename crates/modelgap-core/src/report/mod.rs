@@ -2,10 +2,11 @@
 //! self-contained HTML page with SVG plots, and an MCAP file for Foxglove.
 //!
 //! The page shows, in order: the title, the verdict in a box, summary paragraphs, a table,
-//! then the measured signals against the model before and after an effect was added, the
-//! residuals with their noise band and failure windows shaded, the ranking of candidate
-//! effects as a bar chart, and any domain plots the caller adds (a cloth error map, for
-//! example). Every plot has a caption that says what to look at. The page needs no network,
+//! then the measured signals against the model before and after an effect was added (each
+//! with the residual beneath on the same time axis, its noise band and failure windows
+//! shaded, and a zoom where the error is largest, so an error thinner than a line still
+//! shows), any separate residual plots, the ranking of candidate effects as a bar chart, and
+//! any domain plots the caller adds (a cloth error map, for example). Every plot has a caption that says what to look at. The page needs no network,
 //! no fonts and no JavaScript.
 //!
 //! The inputs are plain structs ([`Report`], [`SeriesPlot`], [`ResidualPlot`],
@@ -37,6 +38,8 @@
 //!         measured,
 //!         before,
 //!         after: None,
+//!         band: 0.02,
+//!         windows: Vec::new(),
 //!     }],
 //!     residuals: vec![ResidualPlot {
 //!         title: "current i".into(),
@@ -63,6 +66,7 @@ mod decimate;
 mod format;
 mod foxglove;
 mod html;
+mod ranking;
 mod svg;
 
 pub use format::{escape, format_number};
@@ -71,10 +75,13 @@ pub use foxglove::{
     RESIDUAL_TOPIC, write_comparison, write_comparison_mcap,
 };
 pub use html::{render_html, write_html};
-pub use svg::{ranking_svg, residual_svg, series_svg};
+pub use ranking::ranking_svg;
+pub use svg::{residual_svg, series_svg};
 
 /// A measured signal against the model's prediction before and, optionally, after an effect
-/// was added: one plot of the report.
+/// was added: one figure of the report, with the residual `measured − model` drawn beneath
+/// on the same time axis (against [`SeriesPlot::band`], with [`SeriesPlot::windows`]
+/// shaded) and a zoom on the stretch where the error is largest.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SeriesPlot {
     /// The plot's title, usually the signal's name (plain text).
@@ -89,6 +96,11 @@ pub struct SeriesPlot {
     pub before: Vec<f64>,
     /// The model's prediction after the effect was added, one value per sample.
     pub after: Option<Vec<f64>>,
+    /// Half-width of the band around zero that noise alone would fill in the residual, in
+    /// the signal's unit (finite, ≥ 0; 0 draws no band).
+    pub band: f64,
+    /// The windows where the residual before leaves the band, shaded in the residual strip.
+    pub windows: Vec<FailureWindow>,
 }
 
 /// A residual (`measured − predicted`) before and, optionally, after an effect was added,
@@ -180,7 +192,7 @@ pub(crate) fn validate_series(p: &SeriesPlot) -> Result<()> {
     if let Some(after) = &p.after {
         same_length(&p.title, "after", p.t.len(), after)?;
     }
-    Ok(())
+    validate_band_windows(&p.title, p.band, &p.windows)
 }
 
 /// Checks one [`ResidualPlot`] (see [`Report::validate`]).
@@ -190,17 +202,21 @@ pub(crate) fn validate_residual(p: &ResidualPlot) -> Result<()> {
     if let Some(after) = &p.after {
         same_length(&p.title, "after", p.t.len(), after)?;
     }
-    if !(p.band.is_finite() && p.band >= 0.0) {
+    validate_band_windows(&p.title, p.band, &p.windows)
+}
+
+/// Checks a plot's noise band and failure windows (see [`Report::validate`]).
+fn validate_band_windows(title: &str, band: f64, windows: &[FailureWindow]) -> Result<()> {
+    if !(band.is_finite() && band >= 0.0) {
         return Err(CoreError::InvalidArgument {
             name: "band",
             reason: format!(
-                "the band of residual plot `{}` is {}, expected a finite value ≥ 0",
-                p.title,
-                describe(p.band)
+                "the band of plot `{title}` is {}, expected a finite value ≥ 0",
+                describe(band)
             ),
         });
     }
-    for (k, w) in p.windows.iter().enumerate() {
+    for (k, w) in windows.iter().enumerate() {
         let finite = [w.start, w.end, w.peak, w.peak_time]
             .iter()
             .all(|v| v.is_finite());
@@ -208,9 +224,8 @@ pub(crate) fn validate_residual(p: &ResidualPlot) -> Result<()> {
             return Err(CoreError::InvalidArgument {
                 name: "windows",
                 reason: format!(
-                    "failure window {k} of residual plot `{}` runs from {} s to {} s \
+                    "failure window {k} of plot `{title}` runs from {} s to {} s \
                      (peak {} at {} s), expected finite values with start ≤ end",
-                    p.title,
                     describe(w.start),
                     describe(w.end),
                     describe(w.peak),

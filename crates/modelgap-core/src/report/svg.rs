@@ -1,6 +1,7 @@
-//! The report's SVG plots, drawn with plotters' SVG backend (text as `<text>` elements, no
-//! font files): measured against model, residuals with band and failure windows, and the
-//! ranking bar chart.
+//! The report's time plots, drawn with plotters' SVG backend (text as `<text>` elements, no
+//! font files): measured against model (with the residual beneath on the same time axis and
+//! a zoom where the error is largest) and residuals with band and failure windows. The
+//! ranking bar chart is in [`ranking`](super::ranking).
 
 use std::error::Error;
 
@@ -11,12 +12,11 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::decimate::{self, Decimated};
 use super::format::{escape, format_tick, with_unit};
-use super::{
-    RankingBar, ResidualPlot, SeriesPlot, validate_ranking, validate_residual, validate_series,
-};
+use super::{ResidualPlot, SeriesPlot, validate_residual, validate_series};
+use crate::residual::FailureWindow;
 
 /// Width of every plot (px); the page scales it to the column width.
-const WIDTH: u32 = 960;
+pub(super) const WIDTH: u32 = 960;
 /// Height of a measured-against-model or residual plot (px).
 const HEIGHT: u32 = 380;
 /// Height of the strip above a plot that holds its title and legend (px).
@@ -33,33 +33,37 @@ const COLUMNS: usize = (WIDTH - Y_LABEL_AREA - RIGHT_MARGIN) as usize;
 /// Series up to this many samples draw the measurement as dots as well as a line.
 const MAX_DOTS: usize = 300;
 
-const FONT: &str = "sans-serif";
-const INK: RGBColor = RGBColor(33, 37, 41);
-const MUTED: RGBColor = RGBColor(100, 106, 115);
+pub(super) const FONT: &str = "sans-serif";
+pub(super) const INK: RGBColor = RGBColor(33, 37, 41);
+pub(super) const MUTED: RGBColor = RGBColor(100, 106, 115);
 const MEASURED: RGBColor = RGBColor(64, 64, 64);
 const BEFORE: RGBColor = RGBColor(214, 39, 40);
-const AFTER: RGBColor = RGBColor(31, 95, 191);
+pub(super) const AFTER: RGBColor = RGBColor(31, 95, 191);
 const BAND: RGBColor = RGBColor(221, 221, 221);
 const WINDOW: RGBColor = RGBColor(239, 68, 68);
 /// Opacity of the failure-window shading.
 const WINDOW_ALPHA: f64 = 0.16;
 const GRID_BOLD: RGBColor = RGBColor(222, 225, 230);
-const BAR: RGBColor = RGBColor(176, 183, 195);
+pub(super) const BAR: RGBColor = RGBColor(176, 183, 195);
 
 /// plotters' SVG backend writes `font-size` as the requested size divided by 1.24 (its
 /// estimate of a font's line height over its size); [`px`] undoes that.
 const PLOTTERS_FONT_SCALE: f64 = 1.24;
 
 /// The size to ask plotters for so the SVG text is `size` px.
-fn px(size: f64) -> f64 {
+pub(super) fn px(size: f64) -> f64 {
     size * PLOTTERS_FONT_SCALE
 }
 
-type DrawResult = std::result::Result<(), Box<dyn Error>>;
-type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+pub(super) type DrawResult = std::result::Result<(), Box<dyn Error>>;
+pub(super) type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 
 /// The measured signal (dark grey) against the model before (red) and after (blue) adding
-/// the effect, over time, with axes, ticks and a legend.
+/// the effect, over time, with axes, ticks and a legend; beneath it, on the same time axis,
+/// the residual `measured − model` before and after with the noise band
+/// ([`SeriesPlot::band`]) and the failure windows shaded and numbered; and at the bottom a
+/// zoom on the stretch where the model's error is largest ([`zoom_window`]), so an error
+/// smaller than a line width in the full view still shows.
 ///
 /// Long series are decimated (minimum and maximum per pixel column); non-finite values are
 /// gaps. A plot whose series lengths do not match its time axis (see
@@ -68,7 +72,69 @@ pub fn series_svg(p: &SeriesPlot) -> String {
     if let Err(e) = validate_series(p) {
         return notice_svg(&p.title, &format!("cannot draw this plot: {e}"));
     }
-    render(HEIGHT, |root| draw_series(root, p))
+    let zoom = zoom_window(p);
+    let height = HEADER + SERIES_MAIN + SERIES_STRIP + zoom.map_or(0, |_| SERIES_ZOOM);
+    render(height, |root| draw_series(root, p, zoom))
+}
+
+/// Height of the main panel of a measured-against-model figure (px).
+const SERIES_MAIN: u32 = 270;
+/// Height of the residual strip beneath it (px).
+const SERIES_STRIP: u32 = 180;
+/// Height of the zoom panel at the bottom, with its title line (px).
+const SERIES_ZOOM: u32 = 270;
+/// Height of the zoom panel's title line (px).
+const ZOOM_TITLE: u32 = 34;
+/// The zoom shows this fraction of the whole time span.
+const ZOOM_FRACTION: f64 = 0.12;
+
+/// The stretch `(start, end)` in seconds a measured-against-model figure zooms into: a
+/// [`ZOOM_FRACTION`] of the time span centred where the running mean of
+/// `measured − before` (over 1/200 of the samples, so noise spikes do not win) is largest in
+/// size. `None` for fewer than 20 samples, a zero time span, or no finite non-zero error.
+pub(crate) fn zoom_window(p: &SeriesPlot) -> Option<(f64, f64)> {
+    let n = p.t.len();
+    if n < 20 || p.measured.len() != n || p.before.len() != n {
+        return None;
+    }
+    let (t0, t1) = (p.t[0], p.t[n - 1]);
+    // Finite times are checked by the caller; a zero span has nothing to zoom into.
+    if t1 <= t0 {
+        return None;
+    }
+    // Prefix sums over finite residuals, and their counts.
+    let mut sum = vec![0.0; n + 1];
+    let mut count = vec![0usize; n + 1];
+    for k in 0..n {
+        let r = p.measured[k] - p.before[k];
+        let (v, c) = if r.is_finite() { (r, 1) } else { (0.0, 0) };
+        sum[k + 1] = sum[k] + v;
+        count[k + 1] = count[k] + c;
+    }
+    let w = (n / 200).max(1);
+    let mut best: Option<(f64, usize)> = None;
+    for k in 0..=(n - w) {
+        let c = count[k + w] - count[k];
+        if c == 0 {
+            continue;
+        }
+        let mean = ((sum[k + w] - sum[k]) / c as f64).abs();
+        if mean > best.map_or(0.0, |b| b.0) {
+            best = Some((mean, k + w / 2));
+        }
+    }
+    let centre = p.t[best?.1];
+    let half = 0.5 * ZOOM_FRACTION * (t1 - t0);
+    let (mut a, mut b) = (centre - half, centre + half);
+    if a < t0 {
+        b += t0 - a;
+        a = t0;
+    }
+    if b > t1 {
+        a = (a - (b - t1)).max(t0);
+        b = t1;
+    }
+    Some((a, b))
 }
 
 /// The residual before (red) and after (blue) adding the effect, with the grey band `±band`
@@ -83,26 +149,9 @@ pub fn residual_svg(p: &ResidualPlot) -> String {
     render(HEIGHT, |root| draw_residual(root, p))
 }
 
-/// The candidate effects as horizontal bars, one row each in the given order, the value
-/// (in `unit`) at the end of each bar, the highlighted (chosen) one in blue.
-///
-/// Bars start at zero, so negative values (an effect that makes the error worse) point left.
-/// Non-finite values become a notice.
-pub fn ranking_svg(bars: &[RankingBar], unit: &str) -> String {
-    let title = "Candidate effects, ranked by the error they remove";
-    if let Err(e) = validate_ranking(bars) {
-        return notice_svg(title, &format!("cannot draw this plot: {e}"));
-    }
-    if bars.is_empty() {
-        return notice_svg(title, "no candidate effects were ranked");
-    }
-    let height = RANK_TOP + RANK_ROW * bars.len() as u32 + RANK_BOTTOM;
-    render(height, |root| draw_ranking(root, bars, unit, title))
-}
-
 /// Runs `draw` on a fresh SVG canvas `WIDTH × height` and returns the SVG text; a drawing
 /// error (none is expected from the SVG backend) becomes a notice.
-fn render(height: u32, draw: impl FnOnce(&Area<'_>) -> DrawResult) -> String {
+pub(super) fn render(height: u32, draw: impl FnOnce(&Area<'_>) -> DrawResult) -> String {
     let mut out = String::new();
     let result = {
         let root = SVGBackend::with_string(&mut out, (WIDTH, height)).into_drawing_area();
@@ -117,7 +166,7 @@ fn render(height: u32, draw: impl FnOnce(&Area<'_>) -> DrawResult) -> String {
 
 /// A small SVG that shows a title and a message in place of a plot, written by hand so it
 /// cannot fail.
-pub(crate) fn notice_svg(title: &str, message: &str) -> String {
+pub(super) fn notice_svg(title: &str, message: &str) -> String {
     format!(
         "<svg width=\"{WIDTH}\" height=\"90\" viewBox=\"0 0 {WIDTH} 90\" \
          xmlns=\"http://www.w3.org/2000/svg\">\n\
@@ -209,36 +258,43 @@ fn limits(t: &[f64], lines: &[&Decimated], extra_y: &[f64]) -> (f64, f64, f64, f
 
 type Chart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
-/// Splits off the header and builds the chart with its grid, ticks and axis names.
+/// Builds a chart on `body` with its grid, ticks and axis names; `x_desc` names the time
+/// axis (`None`: tick labels only, for a panel with another beneath it).
 fn chart<'a, 'b>(
     body: &'a Area<'b>,
     (t0, t1, y0, y1): (f64, f64, f64, f64),
     y_desc: &str,
+    x_desc: Option<&str>,
 ) -> std::result::Result<Chart<'a, 'b>, Box<dyn Error>> {
     let mut chart = ChartBuilder::on(body)
         .margin_right(RIGHT_MARGIN)
         .margin_top(6)
-        .x_label_area_size(X_LABEL_AREA)
+        .x_label_area_size(if x_desc.is_some() { X_LABEL_AREA } else { 24 })
         .y_label_area_size(Y_LABEL_AREA)
         .build_cartesian_2d(t0..t1, y0..y1)?;
     let t_span = t1 - t0;
     let y_span = y1 - y0;
     let x_fmt = move |v: &f64| format_tick(*v, t_span);
     let y_fmt = move |v: &f64| format_tick(*v, y_span);
-    chart
-        .configure_mesh()
-        .x_labels(10)
-        .y_labels(7)
+    let mut mesh = chart.configure_mesh();
+    mesh.x_labels(10)
+        .y_labels(if y1 - y0 > 0.0 && body.dim_in_pixel().1 < 200 {
+            5
+        } else {
+            7
+        })
         .x_label_formatter(&x_fmt)
         .y_label_formatter(&y_fmt)
-        .x_desc("time (s)")
         .y_desc(y_desc)
         .label_style((FONT, px(12.0)).into_font().color(&MUTED))
         .axis_desc_style((FONT, px(13.0)).into_font().color(&INK))
         .max_light_lines(0)
         .bold_line_style(GRID_BOLD)
-        .axis_style(MUTED)
-        .draw()?;
+        .axis_style(MUTED);
+    if let Some(x) = x_desc {
+        mesh.x_desc(x);
+    }
+    mesh.draw()?;
     Ok(chart)
 }
 
@@ -268,9 +324,11 @@ fn gaps_note(lines: &[(&str, &Decimated)]) -> Option<String> {
     (!parts.is_empty()).then(|| parts.join("; "))
 }
 
-fn draw_series(root: &Area<'_>, p: &SeriesPlot) -> DrawResult {
+fn draw_series(root: &Area<'_>, p: &SeriesPlot, zoom: Option<(f64, f64)>) -> DrawResult {
     root.fill(&WHITE)?;
-    let (top, body) = root.split_vertically(HEADER);
+    let (top, rest) = root.split_vertically(HEADER);
+    let (main, rest) = rest.split_vertically(SERIES_MAIN);
+    let (strip, zoom_area) = rest.split_vertically(SERIES_STRIP);
     let measured = decimate::min_max(&p.t, &p.measured, COLUMNS);
     let before = decimate::min_max(&p.t, &p.before, COLUMNS);
     let after = p
@@ -288,6 +346,7 @@ fn draw_series(root: &Area<'_>, p: &SeriesPlot) -> DrawResult {
             "model after adding the effect".to_owned(),
         ));
     }
+    legend.extend(band_legend(p.band, &p.windows, &p.unit));
     let mut named = vec![("measured", &measured), ("model before", &before)];
     if let Some(a) = &after {
         named.push(("model after", a));
@@ -302,10 +361,83 @@ fn draw_series(root: &Area<'_>, p: &SeriesPlot) -> DrawResult {
         lines.extend(after.as_ref());
         limits(&p.t, &lines, &[])
     };
-    let mut chart = chart(&body, lim, &y_description("value", &p.unit))?;
+    let mut main_chart = chart(&main, lim, &y_description("value", &p.unit), None)?;
+    draw_signal_lines(
+        &mut main_chart,
+        &measured,
+        &before,
+        after.as_ref(),
+        p.t.len(),
+    )?;
+    if let Some((a, b)) = zoom {
+        // Where the zoom at the bottom looks, outlined and labelled.
+        let (_, _, y0, y1) = lim;
+        main_chart.draw_series(std::iter::once(Rectangle::new(
+            [(a, y0), (b, y1)],
+            INK.mix(0.55).stroke_width(1),
+        )))?;
+        let style = (FONT, px(11.0))
+            .into_font()
+            .color(&INK)
+            .pos(Pos::new(HPos::Center, VPos::Top));
+        main_chart.draw_series(std::iter::once(Text::new(
+            "zoom below".to_owned(),
+            ((a + b) / 2.0, y1),
+            style,
+        )))?;
+    }
+    let notes: Vec<String> = gaps_note(&named).into_iter().chain(off_plot).collect();
+    if !notes.is_empty() {
+        draw_corner_note(&main, &notes.join("; "))?;
+    }
 
-    draw_line(&mut chart, &measured, MEASURED.stroke_width(1))?;
-    if p.t.len() <= MAX_DOTS {
+    // The residual beneath, on the same time axis (same margins, so times line up).
+    let residual_before: Vec<f64> = residual(&p.measured, &p.before);
+    let residual_after: Option<Vec<f64>> = p.after.as_ref().map(|a| residual(&p.measured, a));
+    let rb = decimate::min_max(&p.t, &residual_before, COLUMNS);
+    let ra = residual_after
+        .as_ref()
+        .map(|r| decimate::min_max(&p.t, r, COLUMNS));
+    let mut lines = vec![&rb];
+    lines.extend(ra.as_ref());
+    let (t0, t1, y0, mut y1) = limits(&p.t, &lines, &[0.0, 1.25 * p.band, -1.25 * p.band]);
+    if !p.windows.is_empty() {
+        y1 += 0.12 * (y1 - y0);
+    }
+    let lim = (t0, t1, y0, y1);
+    let mut strip_chart = chart(
+        &strip,
+        lim,
+        &y_description("measured − model", &p.unit),
+        Some("time (s)"),
+    )?;
+    draw_band_and_windows(&mut strip_chart, lim, p.band, &p.windows)?;
+    draw_line(&mut strip_chart, &rb, BEFORE.stroke_width(1))?;
+    if let Some(a) = &ra {
+        draw_line(&mut strip_chart, a, AFTER.stroke_width(1))?;
+    }
+
+    if let Some(window) = zoom {
+        draw_zoom(&zoom_area, p, window)?;
+    }
+    Ok(())
+}
+
+/// `measured − model`, sample by sample.
+fn residual(measured: &[f64], model: &[f64]) -> Vec<f64> {
+    measured.iter().zip(model).map(|(m, p)| m - p).collect()
+}
+
+/// The measurement (with dots when there are few samples) and the model lines.
+fn draw_signal_lines(
+    chart: &mut Chart<'_, '_>,
+    measured: &Decimated,
+    before: &Decimated,
+    after: Option<&Decimated>,
+    n_samples: usize,
+) -> DrawResult {
+    draw_line(chart, measured, MEASURED.stroke_width(1))?;
+    if n_samples <= MAX_DOTS {
         for segment in &measured.segments {
             chart.draw_series(
                 segment
@@ -314,14 +446,123 @@ fn draw_series(root: &Area<'_>, p: &SeriesPlot) -> DrawResult {
             )?;
         }
     }
-    draw_line(&mut chart, &before, BEFORE.stroke_width(2))?;
-    if let Some(a) = &after {
-        draw_line(&mut chart, a, AFTER.stroke_width(2))?;
+    draw_line(chart, before, BEFORE.stroke_width(2))?;
+    if let Some(a) = after {
+        draw_line(chart, a, AFTER.stroke_width(2))?;
     }
-    let notes: Vec<String> = gaps_note(&named).into_iter().chain(off_plot).collect();
-    if !notes.is_empty() {
-        draw_corner_note(&body, &notes.join("; "))?;
+    Ok(())
+}
+
+/// The zoom panel: measured against the model over `[a, b]` only, its y axis fitted to the
+/// values there.
+fn draw_zoom(area: &Area<'_>, p: &SeriesPlot, (a, b): (f64, f64)) -> DrawResult {
+    let (title_area, body) = area.split_vertically(ZOOM_TITLE);
+    let lo = p.t.partition_point(|&t| t < a);
+    let hi = p.t.partition_point(|&t| t <= b).max(lo);
+    let t = &p.t[lo..hi];
+    let measured = decimate::min_max(t, &p.measured[lo..hi], COLUMNS);
+    let before = decimate::min_max(t, &p.before[lo..hi], COLUMNS);
+    let after = p
+        .after
+        .as_ref()
+        .map(|x| decimate::min_max(t, &x[lo..hi], COLUMNS));
+    let mean_gap = |model: &[f64]| {
+        let (s, n) = p.measured[lo..hi]
+            .iter()
+            .zip(&model[lo..hi])
+            .map(|(m, x)| m - x)
+            .filter(|d| d.is_finite())
+            .fold((0.0, 0usize), |(s, n), d| (s + d, n + 1));
+        (n > 0).then(|| s / n as f64)
+    };
+    let mut title = format!(
+        "zoom on {}–{} s, where the model's error is largest",
+        format_tick(a, b - a),
+        format_tick(b, b - a)
+    );
+    if let Some(g) = mean_gap(&p.before) {
+        title.push_str(&format!(
+            ": measured − model averages {} before",
+            with_unit(g, &p.unit)
+        ));
+        if let Some(g) = p.after.as_deref().and_then(mean_gap) {
+            title.push_str(&format!(", {} after", with_unit(g, &p.unit)));
+        }
     }
+    let style = (FONT, px(13.0))
+        .into_font()
+        .color(&INK)
+        .pos(Pos::new(HPos::Left, VPos::Center));
+    title_area.draw(&Text::new(title, (16, (ZOOM_TITLE / 2 + 2) as i32), style))?;
+    let mut lines = vec![&measured, &before];
+    lines.extend(after.as_ref());
+    let (_, _, y0, y1) = limits(t, &lines, &[]);
+    let mut zoom_chart = chart(
+        &body,
+        (a, b, y0, y1),
+        &y_description("value", &p.unit),
+        Some("time (s)"),
+    )?;
+    draw_signal_lines(&mut zoom_chart, &measured, &before, after.as_ref(), t.len())
+}
+
+/// Legend entries for a noise band (when there is one) and failure windows (when any).
+fn band_legend(band: f64, windows: &[FailureWindow], unit: &str) -> Vec<(Swatch, String)> {
+    let mut legend = Vec::new();
+    if band > 0.0 {
+        legend.push((
+            Swatch::Fill(BAND, 1.0),
+            format!("noise band ±{}", with_unit(band, unit)),
+        ));
+    }
+    if !windows.is_empty() {
+        legend.push((
+            Swatch::Fill(WINDOW, WINDOW_ALPHA * 1.6),
+            "model fails".to_owned(),
+        ));
+    }
+    legend
+}
+
+/// The grey band `±band`, the failure windows shaded and numbered at the top, and the zero
+/// line, under a residual.
+fn draw_band_and_windows(
+    chart: &mut Chart<'_, '_>,
+    (t0, t1, y0, y1): (f64, f64, f64, f64),
+    band: f64,
+    windows: &[FailureWindow],
+) -> DrawResult {
+    if band > 0.0 {
+        chart.draw_series(std::iter::once(Rectangle::new(
+            [(t0, -band), (t1, band)],
+            BAND.filled(),
+        )))?;
+    }
+    // At least 2 px wide, so a one-sample window still shows.
+    let min_width = 2.0 * (t1 - t0) / COLUMNS as f64;
+    let label_style = (FONT, px(11.0))
+        .into_font()
+        .color(&BEFORE)
+        .pos(Pos::new(HPos::Center, VPos::Top));
+    for (k, w) in windows.iter().enumerate() {
+        let pad = ((min_width - (w.end - w.start)) / 2.0).max(0.0);
+        let (a, b) = ((w.start - pad).max(t0), (w.end + pad).min(t1));
+        chart.draw_series(std::iter::once(Rectangle::new(
+            [(a, y0), (b, y1)],
+            WINDOW.mix(WINDOW_ALPHA).filled(),
+        )))?;
+        if windows.len() <= 30 {
+            chart.draw_series(std::iter::once(Text::new(
+                format!("{}", k + 1),
+                ((a + b) / 2.0, y1),
+                label_style.clone(),
+            )))?;
+        }
+    }
+    chart.draw_series(LineSeries::new(
+        [(t0, 0.0), (t1, 0.0)],
+        MUTED.stroke_width(1),
+    ))?;
     Ok(())
 }
 
@@ -393,16 +634,7 @@ fn draw_residual(root: &Area<'_>, p: &ResidualPlot) -> DrawResult {
         .as_ref()
         .map(|a| decimate::min_max(&p.t, a, COLUMNS));
 
-    let mut legend = vec![(
-        Swatch::Fill(BAND, 1.0),
-        format!("noise band ±{}", with_unit(p.band, &p.unit)),
-    )];
-    if !p.windows.is_empty() {
-        legend.push((
-            Swatch::Fill(WINDOW, WINDOW_ALPHA * 1.6),
-            "model fails".to_owned(),
-        ));
-    }
+    let mut legend = band_legend(p.band, &p.windows, &p.unit);
     legend.push((Swatch::Line(BEFORE, 2), "residual before".to_owned()));
     if after.is_some() {
         legend.push((Swatch::Line(AFTER, 2), "residual after".to_owned()));
@@ -418,42 +650,16 @@ fn draw_residual(root: &Area<'_>, p: &ResidualPlot) -> DrawResult {
         y1 += 0.08 * (y1 - y0);
     }
     let lim = (t0, t1, y0, y1);
-    let mut chart = chart(&body, lim, &y_description("residual", &p.unit))?;
-
-    if p.band > 0.0 {
-        chart.draw_series(std::iter::once(Rectangle::new(
-            [(t0, -p.band), (t1, p.band)],
-            BAND.filled(),
-        )))?;
-    }
-    // At least 2 px wide, so a one-sample window still shows.
-    let min_width = 2.0 * (t1 - t0) / COLUMNS as f64;
-    let label_style = (FONT, px(11.0))
-        .into_font()
-        .color(&BEFORE)
-        .pos(Pos::new(HPos::Center, VPos::Top));
-    for (k, w) in p.windows.iter().enumerate() {
-        let pad = ((min_width - (w.end - w.start)) / 2.0).max(0.0);
-        let (a, b) = ((w.start - pad).max(t0), (w.end + pad).min(t1));
-        chart.draw_series(std::iter::once(Rectangle::new(
-            [(a, y0), (b, y1)],
-            WINDOW.mix(WINDOW_ALPHA).filled(),
-        )))?;
-        if p.windows.len() <= 30 {
-            chart.draw_series(std::iter::once(Text::new(
-                format!("{}", k + 1),
-                ((a + b) / 2.0, y1),
-                label_style.clone(),
-            )))?;
-        }
-    }
-    chart.draw_series(LineSeries::new(
-        [(t0, 0.0), (t1, 0.0)],
-        MUTED.stroke_width(1),
-    ))?;
-    draw_line(&mut chart, &before, BEFORE.stroke_width(1))?;
+    let mut residual_chart = chart(
+        &body,
+        lim,
+        &y_description("residual", &p.unit),
+        Some("time (s)"),
+    )?;
+    draw_band_and_windows(&mut residual_chart, lim, p.band, &p.windows)?;
+    draw_line(&mut residual_chart, &before, BEFORE.stroke_width(1))?;
     if let Some(a) = &after {
-        draw_line(&mut chart, a, AFTER.stroke_width(1))?;
+        draw_line(&mut residual_chart, a, AFTER.stroke_width(1))?;
     }
     let mut named = vec![("residual before", &before)];
     if let Some(a) = &after {
@@ -463,125 +669,4 @@ fn draw_residual(root: &Area<'_>, p: &ResidualPlot) -> DrawResult {
         draw_corner_note(&body, &note)?;
     }
     Ok(())
-}
-
-/// Height of the ranking chart's title strip (px).
-const RANK_TOP: u32 = 56;
-/// Height of one ranking row: label, bar, note (px).
-const RANK_ROW: u32 = 62;
-/// Space below the last ranking row (px).
-const RANK_BOTTOM: u32 = 16;
-/// Left edge of the ranking bars and labels (px).
-const RANK_LEFT: i32 = 16;
-/// Room right of the longest bar for its value label (px).
-const RANK_VALUE_ROOM: i32 = 150;
-
-fn draw_ranking(root: &Area<'_>, bars: &[RankingBar], unit: &str, title: &str) -> DrawResult {
-    root.fill(&WHITE)?;
-    let subtitle = if unit.is_empty() {
-        "bar length: error removed".to_owned()
-    } else {
-        format!("bar length: error removed ({unit})")
-    };
-    let title_style = (FONT, px(17.0), FontStyle::Bold)
-        .into_font()
-        .color(&INK)
-        .pos(Pos::new(HPos::Left, VPos::Center));
-    root.draw(&Text::new(title.to_owned(), (RANK_LEFT, 18), title_style))?;
-    let sub_style = (FONT, px(13.0))
-        .into_font()
-        .color(&MUTED)
-        .pos(Pos::new(HPos::Left, VPos::Center));
-    root.draw(&Text::new(subtitle, (RANK_LEFT, 42), sub_style))?;
-
-    let lo = bars.iter().map(|b| b.value).fold(0.0, f64::min);
-    let hi = bars.iter().map(|b| b.value).fold(0.0, f64::max);
-    let left = RANK_LEFT + if lo < 0.0 { RANK_VALUE_ROOM } else { 0 };
-    let right = WIDTH as i32 - RANK_VALUE_ROOM;
-    let span = if hi > lo { hi - lo } else { 1.0 };
-    let x_of = |v: f64| left + ((v - lo) / span * f64::from(right - left)).round() as i32;
-    let zero = x_of(0.0);
-
-    let label_style = |chosen: bool| {
-        let font = if chosen {
-            (FONT, px(14.0), FontStyle::Bold).into_font()
-        } else {
-            (FONT, px(14.0)).into_font()
-        };
-        font.color(&INK).pos(Pos::new(HPos::Left, VPos::Center))
-    };
-    let note_style = (FONT, px(12.0))
-        .into_font()
-        .color(&MUTED)
-        .pos(Pos::new(HPos::Left, VPos::Center));
-    let value_style = |chosen: bool, h: HPos| {
-        let font = if chosen {
-            (FONT, px(13.0), FontStyle::Bold).into_font()
-        } else {
-            (FONT, px(13.0)).into_font()
-        };
-        font.color(&INK).pos(Pos::new(h, VPos::Center))
-    };
-    for (i, bar) in bars.iter().enumerate() {
-        let y = (RANK_TOP + RANK_ROW * i as u32) as i32;
-        if bar.highlight {
-            root.draw(&Rectangle::new(
-                [(4, y - 2), (WIDTH as i32 - 4, y + RANK_ROW as i32 - 6)],
-                AFTER.mix(0.07).filled(),
-            ))?;
-        }
-        let label = if bar.highlight {
-            format!("{}. {}  (chosen)", i + 1, bar.label)
-        } else {
-            format!("{}. {}", i + 1, bar.label)
-        };
-        root.draw(&Text::new(
-            label,
-            (RANK_LEFT, y + 10),
-            label_style(bar.highlight),
-        ))?;
-        let x = x_of(bar.value);
-        let (a, b) = if x >= zero {
-            (zero, x.max(zero + 1))
-        } else {
-            (x, zero)
-        };
-        let color = if bar.highlight { AFTER } else { BAR };
-        root.draw(&Rectangle::new([(a, y + 20), (b, y + 36)], color.filled()))?;
-        if lo < 0.0 {
-            // The zero line, only beside the bar, so it never crosses a label.
-            root.draw(&PathElement::new(
-                vec![(zero, y + 17), (zero, y + 39)],
-                MUTED.stroke_width(1),
-            ))?;
-        }
-        let value = with_unit(bar.value, short_unit(unit));
-        if bar.value >= 0.0 {
-            root.draw(&Text::new(
-                value,
-                (b + 8, y + 28),
-                value_style(bar.highlight, HPos::Left),
-            ))?;
-        } else {
-            root.draw(&Text::new(
-                value,
-                (a - 8, y + 28),
-                value_style(bar.highlight, HPos::Right),
-            ))?;
-        }
-        if !bar.note.is_empty() {
-            root.draw(&Text::new(
-                bar.note.clone(),
-                (RANK_LEFT, y + 48),
-                note_style.clone(),
-            ))?;
-        }
-    }
-    Ok(())
-}
-
-/// The unit written after each bar's value: short units only ("%", "dB"); a long one is
-/// said once in the subtitle.
-fn short_unit(unit: &str) -> &str {
-    if unit.chars().count() <= 4 { unit } else { "" }
 }

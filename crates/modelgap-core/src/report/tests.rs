@@ -6,6 +6,7 @@ use std::io::Cursor;
 use super::*;
 use crate::io::mcap::read_signals;
 use crate::residual::failure_windows;
+use svg::zoom_window;
 
 /// Deterministic noise in [-1, 1] (xorshift64), so tests need no random-number crate.
 fn noise(n: usize, seed: u64) -> Vec<f64> {
@@ -80,6 +81,8 @@ fn plots(name: &str, s: &Synthetic) -> (SeriesPlot, ResidualPlot) {
             measured: s.measured.clone(),
             before: s.before.clone(),
             after: Some(s.after.clone()),
+            band,
+            windows: windows.clone(),
         },
         ResidualPlot {
             title: name.to_owned(),
@@ -576,4 +579,122 @@ fn write_edge_case_page() {
     };
     let path = std::env::temp_dir().join("modelgap-report-edge-cases.html");
     std::fs::write(path, render_html(&r)).unwrap();
+}
+
+/// The figures' y-axis names and texts, as plotters writes them (`<text ...>name</text>`).
+fn svg_texts(svg: &str) -> Vec<String> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            let start = t.find('>')? + 1;
+            let end = t.find("</text>")?;
+            Some(t[start..end].trim().to_owned())
+        })
+        .collect()
+}
+
+// Issue 16: before and after lay on top of each other because the error is thinner than a
+// line at full scale. The figure now carries the residual beneath it and a zoom.
+#[test]
+fn a_series_figure_shows_the_error_beneath_and_zoomed() {
+    let r = report(4000, 1e-3, 1);
+    let p = &r.series[0];
+    let svg = series_svg(p);
+    let texts = svg_texts(&svg);
+    assert!(
+        texts.iter().any(|t| t == "measured − model (A)"),
+        "no residual strip: {texts:?}"
+    );
+    assert!(texts.iter().any(|t| t == "noise band ±0.06 A"), "{texts:?}");
+    assert!(texts.iter().any(|t| t == "model fails"), "{texts:?}");
+    // The windows are numbered in the strip.
+    assert!(texts.iter().any(|t| t == "1") && texts.iter().any(|t| t == "2"));
+    let zoom = texts
+        .iter()
+        .find(|t| t.starts_with("zoom on "))
+        .expect("no zoom panel");
+    assert!(
+        zoom.contains("before") && zoom.contains("after"),
+        "the zoom says how far before and after are off: {zoom}"
+    );
+    // The zoom centres on the missing bias (0.8–1.4 s of every 2 s), not on noise.
+    let (a, b) = zoom_window(p).unwrap();
+    let centre = (a + b) / 2.0 % 2.0;
+    assert!((0.8..1.4).contains(&centre), "zoom {a}–{b} s");
+    assert!(b - a < 0.2 * 4.0, "the zoom is a close look: {a}–{b} s");
+    // Three time axes: the signal's ticks, the strip's and the zoom's, two named.
+    assert_eq!(texts.iter().filter(|t| *t == "time (s)").count(), 2);
+    let html = render_html(&r);
+    assert!(
+        html.contains("The bottom panel zooms into"),
+        "caption says so"
+    );
+    assert!(html.contains("The strip beneath shows measured − model"));
+}
+
+#[test]
+fn a_model_that_is_right_everywhere_gets_no_zoom() {
+    let t: Vec<f64> = (0..500).map(|k| f64::from(k) * 1e-3).collect();
+    let y: Vec<f64> = t.iter().map(|t| t.sin()).collect();
+    let p = SeriesPlot {
+        title: "exact".into(),
+        unit: "V".into(),
+        t,
+        measured: y.clone(),
+        before: y,
+        ..SeriesPlot::default()
+    };
+    assert_eq!(zoom_window(&p), None);
+    assert!(!series_svg(&p).contains("zoom on"));
+}
+
+#[test]
+fn a_bad_band_on_a_series_is_named() {
+    let r = report(400, 1e-3, 1);
+    let mut p = r.series[0].clone();
+    p.band = f64::NAN;
+    let e = Report {
+        series: vec![p],
+        ..Report::default()
+    }
+    .validate()
+    .unwrap_err();
+    assert!(e.to_string().contains("band of plot `current i0`"), "{e}");
+}
+
+#[test]
+fn long_ranking_notes_wrap_inside_the_chart() {
+    let note = "x = 1 ± 0.1 N m; [signature disagrees] measured i below the model and omega \
+                below it first (from 0.1 s); their fault trees point at L+, R+, k+; this effect \
+                would show as beta+ or beta-, which is not among them"
+        .to_owned();
+    let bars = vec![RankingBar {
+        label: "viscous friction".into(),
+        value: 3.0,
+        highlight: true,
+        note: note.clone(),
+    }];
+    let svg = ranking_svg(&bars, "%");
+    let lines: Vec<String> = svg_texts(&svg)
+        .into_iter()
+        .filter(|t| t.contains("signature") || t.contains("among them"))
+        .collect();
+    assert!(lines.len() >= 2, "{lines:?}");
+    assert!(lines.iter().all(|l| l.chars().count() <= 150), "{lines:?}");
+    // Nothing is lost: the lines hold the whole note.
+    let joined = svg_texts(&svg).join(" ");
+    assert!(joined.contains("which is not among them"));
+    // The chart grows with the note instead of clipping it.
+    let short = ranking_svg(
+        &[RankingBar {
+            note: "x = 1".into(),
+            ..bars[0].clone()
+        }],
+        "%",
+    );
+    let height = |s: &str| {
+        let h = s.split("height=\"").nth(1).unwrap();
+        h[..h.find('"').unwrap()].parse::<u32>().unwrap()
+    };
+    assert!(height(&svg) > height(&short));
 }
