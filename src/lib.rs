@@ -14,22 +14,48 @@
 //!
 //! # Example: the loop
 //!
+//! Hold the built-in DC motor against the bundled recording that hides a physical effect
+//! (`examples/data/motor_hidden_effect.csv`): compare shows where it fails, explain names
+//! what is missing, and the fix — the model with the effect built in, and its model file —
+//! brings the error down to the noise floor.
+//!
 //! ```
 //! use modelgap::{CompareOptions, ExplainOptions, LoadOptions, compare, explain};
 //!
+//! // The model and the recording, as the command line loads them.
 //! let motor = modelgap::load_model("dc-motor", &LoadOptions::default())?;
-//! let rec = modelgap::load_recording(
-//!     "examples/data/motor_hidden_effect.csv".as_ref(),
-//!     motor.as_ref(),
-//! )?;
+//! let path = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data/motor_hidden_effect.csv");
+//! let rec = modelgap::load_recording(path.as_ref(), motor.as_ref())?;
+//!
+//! // compare: where the model fails. The current's error is 5.6× its noise floor.
+//! let before = compare(motor.as_ref(), &rec, &CompareOptions::default())?;
+//! print!("{}", motor.story().comparison_text(&before));
+//! let i = before.output("i").expect("the recording measures i");
+//! assert!(i.rms_over_floor() > 4.0 && !i.windows.is_empty());
+//!
+//! // explain: which effect is missing, with its fitted value ± uncertainty.
 //! let ex = explain(motor.as_ref(), &rec, &ExplainOptions::default())?;
-//! println!("{}", motor.story().explanation_text(&ex, 5)); // Coulomb friction, 0.012 N m
-//! assert_eq!(ex.chosen[0].candidate.id, "coulomb@1m");
-//! let fixed = motor.with_effects(&ex.effects())?; // a new model with the effect built in
+//! print!("{}", motor.story().explanation_text(&ex, 3));
+//! let chosen = &ex.chosen[0];
+//! assert_eq!(chosen.candidate.id, "coulomb@1m"); // Coulomb friction on the shaft
+//! assert!((chosen.params[0].value - 0.012).abs() < 5e-4); // tau_c, N m: the hidden truth
+//!
+//! // fix: the model with the effect built in, and its file for keeping (what `modelgap fix
+//! // --out` writes); compared again, the error falls to the noise floor.
+//! let fixed = motor.with_effects(&ex.effects())?;
+//! let file = fixed.to_file_text().expect("a bond graph has a model file");
+//! assert!(file.contains("Coulomb"));
 //! let after = compare(fixed.as_ref(), &rec, &CompareOptions::default())?;
-//! println!("{}", fixed.story().comparison_text(&after)); // the error at its noise floor
+//! print!("{}", fixed.story().before_after_text(&before, &after));
+//! let i_after = after.output("i").expect("the recording measures i");
+//! assert!(i_after.rms_over_floor() < 1.3 && i_after.windows.is_empty());
 //! # Ok::<(), modelgap::Error>(())
 //! ```
+//!
+//! The same three calls run on a cloth scene and its marker recording ([`load_model`] knows
+//! the kind). The report a person reads without the terminal — the plots of measured against
+//! model with the error beneath, the ranking, the verdict — is
+//! [`Story::write_report`](story::Story::write_report).
 //!
 //! # Example: a simulation
 //!
@@ -50,23 +76,34 @@
 //!
 //! # Map
 //!
+//! The workspace is three library crates under this facade; dependencies point one way,
+//! core ← bond, cloth ← `modelgap`:
+//!
+//! - [`modelgap_core`] (re-exported at the top of this crate): recordings and their CSV and
+//!   MCAP files, residuals and noise floors, fitting, the effect-ranking loop and the report.
+//!   Domain-free: it knows no bond graph and no cloth.
+//! - [`modelgap_bond`] (as [`bond`]): bond graphs — elements, causality, equations,
+//!   simulation, causal graphs, fault trees, temporal signatures, diagnosis, model files and
+//!   the candidate effects a bond-graph model offers ([`bond::BondModel`]).
+//! - [`modelgap_cloth`] (as [`cloth`]): the impulse-based cloth solver, meshes, colliders,
+//!   scenes, marker recordings and the cloth's candidate effects ([`cloth::ClothModel`]).
+//!
+//! Inside this crate:
+//!
 //! - [`load`]: [`load_model`] and [`load_recording`], the one place that knows the kinds of
 //!   model (bond-graph files and built-ins, cloth scene files and built-ins).
 //! - [`Model`]: the seam every kind implements (predict, candidates, with effects, and the
 //!   [`Model::story`] its results read by); [`Candidate`], [`Effect`].
 //! - [`compare()`], [`explain()`] and their options and results ([`Comparison`],
 //!   [`Explanation`], [`Verdict`]); [`judge`]: what noise leaves, and when a recording cannot
-//!   be judged; [`fit`]: bounded Levenberg–Marquardt.
+//!   be judged; [`fit`]: bounded Levenberg–Marquardt; [`calibrate()`]: a model's own free
+//!   parameters fitted before the loop.
 //! - [`story`], [`json`], [`report`]: the results as text, JSON and the HTML report with its
 //!   Foxglove MCAP.
 //! - [`Recording`], [`Signal`], [`io`]: signals on one time axis, CSV and MCAP
 //!   ([`io::read_recording_path`], [`io::write_recording_path`] choose by extension;
 //!   [`io::atomic`] writes every file atomically).
 //! - [`residual`]: residual statistics, the noise floor, thresholds, failure windows.
-//! - [`bond`]: the bond-graph crate (`modelgap-bond`): [`bond::BondGraph`], model files,
-//!   [`bond::library`], causality, equations, simulation, diagnosis, the candidate effects.
-//! - [`cloth`]: the cloth crate (`modelgap-cloth`): meshes, the solvers, colliders, scenes,
-//!   marker recordings, [`cloth::ClothModel`].
 //! - [`prelude`]: the names most programs need, in one `use`.
 //! - [`Error`], [`Result`]: one error type over the workspace's crates.
 
