@@ -379,10 +379,11 @@ fn draw_series(root: &Area<'_>, p: &SeriesPlot, zoom: Option<(f64, f64)>) -> Dra
         let style = (FONT, px(11.0))
             .into_font()
             .color(&INK)
-            .pos(Pos::new(HPos::Center, VPos::Top));
+            .pos(Pos::new(HPos::Center, VPos::Bottom));
+        // At the box's foot: the top right corner holds the notes of lines off the plot.
         main_chart.draw_series(std::iter::once(Text::new(
             "zoom below".to_owned(),
-            ((a + b) / 2.0, y1),
+            ((a + b) / 2.0, y0 + 0.01 * (y1 - y0)),
             style,
         )))?;
     }
