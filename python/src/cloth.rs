@@ -765,6 +765,8 @@ type ReportState = (
     f64,
     String,
     Option<String>,
+    bool,
+    Option<f64>,
 );
 
 /// A fallback as a short code (for pickling) and back.
@@ -848,6 +850,18 @@ impl PyStepReport {
     fn fallback(&self) -> Option<String> {
         self.inner.fallback.map(|f| f.to_string())
     }
+    /// Whether a step stopped because its error stopped falling: the stretch tolerance
+    /// is below what it can reach (``ClothWorld.stagnation`` says the level).
+    #[getter]
+    fn stagnated(&self) -> bool {
+        self.inner.stagnated
+    }
+    /// The tolerance held instead of the requested one after a step stagnated (the
+    /// largest over the steps), or ``None``.
+    #[getter]
+    fn relaxed_tolerance(&self) -> Option<f64> {
+        self.inner.relaxed_tolerance
+    }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, ReportState)> {
         let r = &slf.get().inner;
@@ -864,6 +878,8 @@ impl PyStepReport {
                 r.max_penetration,
                 method_name(r.method_used).to_owned(),
                 fallback_code(r.fallback),
+                r.stagnated,
+                r.relaxed_tolerance,
             ),
         ))
     }
@@ -882,6 +898,8 @@ impl PyStepReport {
         max_penetration: f64,
         method: &str,
         fallback: Option<&str>,
+        stagnated: bool,
+        relaxed_tolerance: Option<f64>,
     ) -> PyResult<Self> {
         Ok(Self {
             inner: StepReport {
@@ -894,6 +912,8 @@ impl PyStepReport {
                 max_penetration,
                 method_used: parse_method(method)?,
                 fallback: fallback_of(fallback),
+                stagnated,
+                relaxed_tolerance,
             },
             steps,
         })
@@ -1238,6 +1258,12 @@ impl PyClothWorld {
     #[getter]
     fn n_kinematic_pins(&self) -> usize {
         self.inner.kinematic_pins().len()
+    }
+    /// The warning when a step found the stretch tolerance out of reach (the level reached
+    /// and the one held since), or ``None``.
+    #[getter]
+    fn stagnation(&self) -> Option<String> {
+        self.inner.stagnation().map(ToString::to_string)
     }
     /// The solver parameters (assign a new ``SolverParams`` to change them between steps).
     #[getter]

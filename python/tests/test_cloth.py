@@ -469,3 +469,16 @@ def test_ctrl_c_stops_a_long_step():
     finally:
         timer.cancel()
     assert 0.0 < world.time < 1000.0
+
+
+def test_an_unreachable_tolerance_stagnates_once_and_says_the_level():
+    # A 12 x 6 cloth held by every other vertex of its top row, inextensible: the straight
+    # row between two pins cannot hold its load to 1e-9.
+    world = ClothWorld(SolverParams(stretch_tolerance=1e-9, max_iterations=1000))
+    world.add_cloth(ClothMesh.grid(12, 6, 0.05, pins=list(range(0, 12, 2))))
+    report = world.step(30, dt=0.01)
+    assert report.stagnated
+    assert report.relaxed_tolerance is not None and report.relaxed_tolerance > 1e-9
+    assert report.iterations < 30 * 1000 / 10
+    assert world.stagnation is not None and "cannot be reached" in world.stagnation
+    assert pickle.loads(pickle.dumps(report)).relaxed_tolerance == report.relaxed_tolerance

@@ -255,6 +255,9 @@ fn run_summary(run: &ClothRun, wall_s: f64, out: &Path) -> String {
             String::new()
         },
     );
+    if let Some(stagnation) = &st.stagnation {
+        let _ = writeln!(s, "warning: {stagnation}");
+    }
     let _ = writeln!(
         s,
         "wall time {:.3} s, {} x real time",
@@ -293,6 +296,8 @@ struct BenchReport {
     unconverged_steps: usize,
     /// Steps that ran another method than the one asked for (Newton could not be built).
     fallback_steps: usize,
+    /// The stretch tolerance could not be reached: the warning, naming the level held.
+    warning: Option<String>,
     wall_s: f64,
     x_real_time: Option<f64>,
     threads: usize,
@@ -357,6 +362,7 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         max_iterations: st.max_iterations,
         unconverged_steps: st.unconverged_steps,
         fallback_steps: st.fallback_steps,
+        warning: st.stagnation.map(|s| s.to_string()),
         wall_s,
         x_real_time: real_time_factor(&st, wall_s),
         threads,
@@ -412,6 +418,9 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         report.unconverged_steps,
         report.fallback_steps
     );
+    if let Some(w) = &report.warning {
+        let _ = writeln!(s, "warning: {w}");
+    }
     let _ = writeln!(
         s,
         "wall time {:.3} s for {} s simulated: {} x real time",

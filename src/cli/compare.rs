@@ -48,13 +48,13 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
     if args.json {
         let mut value = story.comparison_json(&before);
         value["data"] = json!(args.common.data.display().to_string());
-        value["notes"] = json!(loaded.notes);
+        value["notes"] = json!(loaded.notes_now());
         if let Some(page) = &page {
             value["report"] = json!(page.display().to_string());
         }
         return super::print(&json_text(&value)?);
     }
-    print_notes(&loaded.notes);
+    print_notes(&loaded.notes_now());
     let mut out = story.comparison_text(&before);
     if let Some(page) = &page {
         out.push_str(&report_line(page));

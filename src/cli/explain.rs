@@ -63,12 +63,19 @@ pub fn run(args: &ExplainArgs) -> anyhow::Result<()> {
     if args.json {
         let mut value = story.explanation_json(&ex);
         value["data"] = json!(args.common.data.display().to_string());
-        value["notes"] = json!(loaded.notes);
+        value["notes"] = json!(loaded.notes_now());
         if let Some(page) = &page {
             value["report"] = json!(page.display().to_string());
         }
         return super::print(&json_text(&value)?);
     }
+    // What the model found while it ran (a stretch tolerance out of reach).
+    let late: Vec<String> = loaded
+        .notes_now()
+        .into_iter()
+        .filter(|n| !loaded.notes.contains(n))
+        .collect();
+    print_notes(&late);
     let mut out = format!(
         "model {} explaining {} ({} candidate effects fitted)\n",
         ex.model,

@@ -152,6 +152,18 @@ impl Loaded {
         })
     }
 
+    /// The notes, with those the model found while it ran (a cloth's stretch
+    /// tolerance out of reach), each once.
+    pub fn notes_now(&self) -> Vec<String> {
+        let mut notes = self.notes.clone();
+        for n in self.model.notes(&self.rec) {
+            if !notes.contains(&n) {
+                notes.push(n);
+            }
+        }
+        notes
+    }
+
     /// Compare options with the user's noise floors.
     pub fn compare_options(&self) -> CompareOptions {
         CompareOptions {

@@ -81,4 +81,4 @@ pub use particles::{ParticleId, ParticleSet};
 pub use rail::Rail;
 pub use scenes::Scene;
 pub use solver::{Fallback, Method, SolverParams, StepReport};
-pub use world::{ClothId, ClothWorld};
+pub use world::{ClothId, ClothWorld, STALL_MARGIN, Stagnation};

@@ -80,6 +80,7 @@ use crate::markers::MarkerRecording;
 use crate::scene_world::SceneWorld;
 use crate::scenes::Scene;
 use crate::solver::Method;
+use crate::world::Stagnation;
 
 /// Factor on the predictability spread: the spread between runs at `h` and
 /// `h/2` is half the error of the `h` run for a first-order scheme
@@ -136,6 +137,9 @@ impl Default for PredictSettings {
 pub struct ClothModel {
     scene: Scene,
     settings: PredictSettings,
+    /// The worst stretch tolerance out of reach that a prediction met (shared by
+    /// the clones a fit makes), for [`Model::notes`].
+    stagnation: std::sync::Arc<std::sync::Mutex<Option<Stagnation>>>,
     /// Plain descriptions of the effects built in, for the file's header.
     added: Vec<String>,
 }
@@ -147,6 +151,7 @@ impl ClothModel {
         Self {
             scene,
             settings: PredictSettings::default(),
+            stagnation: std::sync::Arc::default(),
             added: Vec::new(),
         }
     }
@@ -224,7 +229,14 @@ impl ClothModel {
         } else {
             None
         };
-        let frames = simulate_markers(&scene, &ids, rec.t(), settings, pins.as_ref())?;
+        let (frames, stagnation) =
+            simulate_markers_report(&scene, &ids, rec.t(), settings, pins.as_ref())?;
+        if let Some(found) = stagnation
+            && let Ok(mut worst) = self.stagnation.lock()
+            && worst.is_none_or(|w| found.reached > w.reached)
+        {
+            *worst = Some(found);
+        }
         let values = signals
             .iter()
             .map(|&(_, id, axis)| {
@@ -344,6 +356,21 @@ pub fn simulate_markers(
     settings: &PredictSettings,
     pins: Option<&MarkerRecording>,
 ) -> Result<MarkerRecording> {
+    simulate_markers_report(scene, ids, t, settings, pins).map(|(frames, _)| frames)
+}
+
+/// As [`simulate_markers`], with where the stretch tolerance proved out of reach
+/// ([`crate::Stagnation`], `None` when every step reached it).
+///
+/// # Errors
+/// As [`simulate_markers`].
+pub fn simulate_markers_report(
+    scene: &Scene,
+    ids: &[u32],
+    t: &[f64],
+    settings: &PredictSettings,
+    pins: Option<&MarkerRecording>,
+) -> Result<(MarkerRecording, Option<Stagnation>)> {
     let mut sw = SceneWorld::new(scene, pins)?;
     let n = sw.positions().len();
     if let Some(&bad) = ids.iter().find(|&&id| id as usize >= n) {
@@ -405,7 +432,11 @@ pub fn simulate_markers(
             );
         }
     }
-    MarkerRecording::new(t.to_vec(), ids.to_vec(), frames)
+    let stagnation = sw.world.stagnation().copied();
+    Ok((
+        MarkerRecording::new(t.to_vec(), ids.to_vec(), frames)?,
+        stagnation,
+    ))
 }
 
 /// The typical sizes of a scene that set the candidates' scales and bounds.
@@ -723,13 +754,20 @@ impl Model for ClothModel {
 
     /// Whether pinned vertices follow the recorded markers; the grid's unmarked vertices
     /// are not listed (a recording marks a few of them).
+    /// Pinned vertices following the markers; and, once a prediction has run, a
+    /// stretch tolerance the solver could not reach (the level it held instead).
     fn notes(&self, rec: &Recording) -> Vec<String> {
         let _ = rec;
+        let mut notes = Vec::new();
         if self.scene.pins_from_markers {
-            vec!["pinned vertices with markers follow the recorded positions".to_owned()]
-        } else {
-            Vec::new()
+            notes.push("pinned vertices with markers follow the recorded positions".to_owned());
         }
+        if let Ok(found) = self.stagnation.lock()
+            && let Some(s) = *found
+        {
+            notes.push(format!("the cloth solver: {s}"));
+        }
+        notes
     }
 
     fn outputs(&self) -> Vec<String> {
@@ -779,6 +817,7 @@ impl Model for ClothModel {
         Ok(Box::new(ClothModel {
             scene,
             settings: self.settings.clone(),
+            stagnation: std::sync::Arc::default(),
             added,
         }))
     }

@@ -232,6 +232,19 @@ pub const MAX_HALVINGS: usize = 8;
 /// (0.1 was tried: no better on `corner`, worse on `two-corners`.)
 pub const COMPRESSION_STIFFNESS: f64 = 0.0;
 
+/// Iterations over which the error must fall by [`STALL_RATIO`], or the step
+/// stops as stagnated (see [`crate::solver::stalled`]).
+pub const STALL_WINDOW: usize = 30;
+
+/// The factor the smallest error so far must fall by over [`STALL_WINDOW`]
+/// iterations (dimensionless). A sound Newton step shrinks it by orders in a
+/// few iterations (a stale factor by at least `refactor_ratio` per
+/// iteration); where the requested tolerance is below what the problem
+/// allows (a straight row between pins under a transverse load at 1e-9)
+/// the stretch creeps down by 0.3 % per iteration and would run the
+/// iteration cap on every step.
+pub const STALL_RATIO: f64 = 0.5;
+
 const NONE: u32 = u32::MAX;
 
 /// Why the solver could not be built: faer's ordering, symbolic
@@ -275,6 +288,8 @@ pub(crate) struct NewtonOutcome {
     pub(crate) factorizations: usize,
     pub(crate) fallback_sweeps: usize,
     pub(crate) converged: bool,
+    /// The error stopped falling ([`STALL_WINDOW`], [`STALL_RATIO`]).
+    pub(crate) stagnated: bool,
     pub(crate) max_stretch: f64,
 }
 
@@ -362,6 +377,8 @@ pub(crate) struct NewtonSolver {
     /// `x − x̃` of the last solve (m): the next step starts from its
     /// preview plus this correction.
     last_correction: Vec<Vector3<f64>>,
+    /// The smallest error so far after each iteration of a solve (scratch).
+    best_errors: Vec<f64>,
     cur: State,
     trial: State,
 }
@@ -528,6 +545,7 @@ impl NewtonSolver {
             mean_rest,
             rhs: vec![0.0; dim],
             last_correction: vec![Vector3::zeros(); n_particles],
+            best_errors: Vec::with_capacity(STALL_WINDOW + 1),
             cur: state.clone(),
             trial: state,
         })
@@ -598,10 +616,19 @@ impl NewtonSolver {
         }
         let mut need_refactor = false;
         let mut increases_left = MAX_INCREASES;
+        self.best_errors.clear();
         loop {
             out.max_stretch = self.cur.max_stretch;
             if self.cur.max_stretch <= tol && self.cur.contact_residual <= tol * self.mean_rest {
                 out.converged = true;
+                break;
+            }
+            // The error in tolerances: stretch, and the momentum residual of
+            // particles in contact.
+            let error = (self.cur.max_stretch / tol)
+                .max(self.cur.contact_residual / (tol * self.mean_rest));
+            if solver::stalled(&mut self.best_errors, error, STALL_WINDOW, STALL_RATIO) {
+                out.stagnated = true;
                 break;
             }
             if out.iterations >= params.max_iterations || !self.cur.merit.is_finite() {

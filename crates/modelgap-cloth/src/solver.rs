@@ -209,6 +209,32 @@ pub struct StepReport {
     /// Why the step did not run [`SolverParams::method`]; `None` when it did.
     /// Of merged reports, the first step's that fell back.
     pub fallback: Option<Fallback>,
+    /// The iteration stopped because the error stopped falling (the smallest
+    /// error so far did not halve over 30 Newton iterations, or did not fall at
+    /// all over 100 sweeps): the tolerance asked for is below what this step can reach,
+    /// and the step went on with [`max_stretch`](Self::max_stretch), the
+    /// achievable level. Of merged reports, whether any step stagnated.
+    pub stagnated: bool,
+    /// The tolerance the step held instead of
+    /// [`SolverParams::stretch_tolerance`] (relative): after a step stagnates,
+    /// the world holds twice the stretch reached there
+    /// ([`ClothWorld::stretch_floor`](crate::ClothWorld::stretch_floor)), so later
+    /// steps stop at the achievable level instead of stagnating again; `None`
+    /// while the requested tolerance is held. Of merged reports, the largest.
+    pub relaxed_tolerance: Option<f64>,
+}
+
+/// Whether an iteration has stagnated: pushes `error` (its error now, in
+/// any unit) as the smallest so far onto `best`, and says whether that
+/// smallest error has not fallen below the factor `ratio` of what it was
+/// `window` iterations ago (with `ratio` 1: has not fallen at all). A NaN
+/// error counts as infinite.
+pub(crate) fn stalled(best: &mut Vec<f64>, error: f64, window: usize, ratio: f64) -> bool {
+    let error = if error.is_nan() { f64::INFINITY } else { error };
+    let smallest = best.last().map_or(error, |&b| b.min(error));
+    best.push(smallest);
+    let n = best.len();
+    n > window && smallest >= ratio * best[n - 1 - window]
 }
 
 /// Why a step ran [`Method::GaussSeidel`] instead of [`SolverParams::method`]
@@ -241,8 +267,8 @@ impl std::fmt::Display for Fallback {
 
 impl StepReport {
     /// Combines the reports of consecutive steps: summed work, worst error,
-    /// converged only if every step converged, the last step's method and the
-    /// first fallback.
+    /// converged only if every step converged, the last step's method, the
+    /// first fallback, stagnated if any step did, the largest relaxed tolerance.
     #[must_use]
     pub fn merge(self, next: Self) -> Self {
         Self {
@@ -259,6 +285,11 @@ impl StepReport {
             max_penetration: self.max_penetration.max(next.max_penetration),
             method_used: next.method_used,
             fallback: self.fallback.or(next.fallback),
+            stagnated: self.stagnated || next.stagnated,
+            relaxed_tolerance: match (self.relaxed_tolerance, next.relaxed_tolerance) {
+                (Some(a), Some(b)) => Some(a.max(b)),
+                (a, b) => a.or(b),
+            },
         }
     }
 }
@@ -328,6 +359,26 @@ pub(crate) fn velocity_sweep(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_iteration_stalls_when_its_best_error_stops_falling() {
+        let mut best = Vec::new();
+        // Halving every iteration: never stalled.
+        assert!((0..50).all(|k| !stalled(&mut best, 0.5_f64.powi(k), 30, 0.5)));
+        // Creeping down by 1 % an iteration: stalled once the window is full.
+        best.clear();
+        let n = (0..100)
+            .position(|k| stalled(&mut best, 0.99_f64.powi(k), 30, 0.5))
+            .unwrap();
+        assert_eq!(n, 30);
+        // With ratio 1, only no fall at all stalls; NaN counts as infinite.
+        best.clear();
+        assert!(!stalled(&mut best, f64::NAN, 2, 1.0));
+        assert!(!stalled(&mut best, 3.0, 2, 1.0));
+        assert!(!stalled(&mut best, 2.0, 2, 1.0));
+        assert!(!stalled(&mut best, 2.5, 2, 1.0));
+        assert!(stalled(&mut best, 2.5, 2, 1.0));
+    }
 
     fn pair(ka: f64, kb: f64) -> (DistanceConstraints, Vec<f64>, Vec<Vector3<f64>>) {
         let mut c = DistanceConstraints::new();

@@ -1913,6 +1913,16 @@ class StepReport:
         """Why a step ran another method than the one asked for (the first such step), or
         ``None``."""
 
+    @property
+    def stagnated(self) -> bool:
+        """Whether a step stopped because its error stopped falling: the stretch tolerance
+        is below what it can reach (``ClothWorld.stagnation`` says the level)."""
+
+    @property
+    def relaxed_tolerance(self) -> Optional[float]:
+        """The tolerance held instead of the requested one after a step stagnated (the
+        largest over the steps), or ``None``."""
+
     @staticmethod
     def _from_state(
         steps: int,
@@ -1925,6 +1935,8 @@ class StepReport:
         max_penetration: float,
         method: str,
         fallback: Optional[str],
+        stagnated: bool,
+        relaxed_tolerance: Optional[float],
     ) -> StepReport: ...
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]: ...
 
@@ -2177,6 +2189,11 @@ class ClothWorld:
     @property
     def n_kinematic_pins(self) -> int:
         """The number of kinematic pins."""
+
+    @property
+    def stagnation(self) -> Optional[str]:
+        """The warning when a step found the stretch tolerance out of reach (the level
+        reached and the one held since), or ``None``."""
 
     @property
     def params(self) -> SolverParams:

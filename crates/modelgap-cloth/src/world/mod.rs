@@ -11,6 +11,8 @@
 
 mod step;
 
+pub use step::{STALL_MARGIN, SWEEP_STALL_RATIO, SWEEP_STALL_WINDOW};
+
 use std::ops::Range;
 
 use nalgebra::Vector3;
@@ -54,6 +56,47 @@ struct SolverWorkspace {
     /// The strip sweep (strips and scratch), built on the first step with
     /// [`Method::Strips`], dropped on a topology change.
     strips: Option<StripSweep>,
+    /// The smallest sweep error so far after each sweep (stagnation).
+    best_errors: Vec<f64>,
+}
+
+/// A world's record of a stretch tolerance it could not reach: the first step
+/// whose iteration stagnated (the error stopped falling, see
+/// [`StepReport::stagnated`]), the stretch reached, and the tolerance held
+/// since. Its [`Display`](std::fmt::Display) is the warning the CLI prints.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stagnation {
+    /// The tolerance asked for (relative).
+    pub requested: f64,
+    /// The largest stretch a stagnated step ended with (relative): the
+    /// achievable level.
+    pub reached: f64,
+    /// The first step that stagnated (1-based).
+    pub step: usize,
+    /// Its end time (s).
+    pub time: f64,
+    /// The tolerance held since ([`STALL_MARGIN`] × `reached`).
+    pub floor: f64,
+    /// Steps that stagnated.
+    pub steps: usize,
+}
+
+impl std::fmt::Display for Stagnation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "stretch tolerance {:.1e} cannot be reached: the solver stopped improving at a \
+             stretch of {:.2e} (step {}, t = {} s); the steps after it held {:.1e} instead \
+             ({} step{} stagnated)",
+            self.requested,
+            self.reached,
+            self.step,
+            crate::error::num(self.time),
+            self.floor,
+            self.steps,
+            if self.steps == 1 { "" } else { "s" }
+        )
+    }
 }
 
 /// All cloths and colliders of a simulation, stepped together.
@@ -79,6 +122,8 @@ pub struct ClothWorld {
     /// External force on each particle (N) besides gravity, constant over a step.
     external_forces: Vec<Vector3<f64>>,
     workspace: SolverWorkspace,
+    /// Where the requested stretch tolerance proved out of reach.
+    stagnation: Option<Stagnation>,
     time: f64,
     /// Steps taken (successful or diverged).
     n_steps: usize,
@@ -97,6 +142,7 @@ impl ClothWorld {
             kinematic: Vec::new(),
             external_forces: Vec::new(),
             workspace: SolverWorkspace::default(),
+            stagnation: None,
             time: 0.0,
             n_steps: 0,
         }
@@ -237,6 +283,20 @@ impl ClothWorld {
     #[must_use]
     pub fn kinematic_pins(&self) -> &[KinematicPin] {
         &self.kinematic
+    }
+
+    /// Whether (and where) a step found the requested stretch tolerance out of
+    /// reach (see [`Stagnation`]); `None` while every step could reach it.
+    #[must_use]
+    pub fn stagnation(&self) -> Option<&Stagnation> {
+        self.stagnation.as_ref()
+    }
+
+    /// The stretch tolerance steps hold instead of the requested one after a
+    /// step stagnated (twice the stretch it reached); `None` before.
+    #[must_use]
+    pub fn stretch_floor(&self) -> Option<f64> {
+        self.stagnation.map(|s| s.floor)
     }
 
     /// The solver parameters.
