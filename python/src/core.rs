@@ -275,6 +275,16 @@ impl PyOutputComparison {
     fn noise_given(&self) -> bool {
         self.inner.noise_given
     }
+    /// How the noise floor was found and how far to trust it: ``"given"``, ``"white"``,
+    /// ``"quantised"``, ``"coloured"`` (likely too low), ``"signal-content"`` (likely too
+    /// high) or ``"unchecked"``.
+    #[getter]
+    fn noise_method(&self) -> String {
+        serde_json::to_value(self.inner.noise_method)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_owned))
+            .unwrap_or_default()
+    }
     /// RMS over the noise floor: about 1 for a right model.
     #[getter]
     fn rms_over_floor(&self) -> f64 {

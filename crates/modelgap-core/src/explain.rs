@@ -25,7 +25,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::compare::{CompareOptions, Floor, noise_floor, shared_outputs};
+use crate::compare::{CompareOptions, Floor, FloorKind, noise_floor, shared_outputs};
 use crate::effect::{Candidate, Effect, Prior};
 use crate::error::{CoreError, Result};
 use crate::fit::{Cancel, FitOptions, FitReport, ResidualProblem, Termination, fit};
@@ -42,6 +42,9 @@ const GRID_FD_STEP: f64 = 1e-3;
 /// Two candidates whose weighted costs differ by less than this fraction are
 /// the same explanation (e.g. "J is off" and "an extra inertia dJ").
 const EQUIVALENT_COST: f64 = 1e-6;
+
+/// How many of the best single effects a pair of effects may start from.
+const PAIR_FIRSTS: usize = 3;
 
 /// A progress callback: `(done, total)` candidate fits.
 pub type Progress = Arc<dyn Fn(usize, usize) + Send + Sync>;
@@ -937,6 +940,14 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         .zip(&measured)
         .map(|(n, m)| noise_floor(n, m, &opts.noise))
         .collect();
+    for (n, f) in names.iter().zip(&floors) {
+        warnings.extend(f.warning(n, &model.unit(n)));
+    }
+    // Outputs whose estimated floor is likely too high: reaching it says nothing.
+    let floor_too_high: Vec<String> = (names.iter().zip(&floors))
+        .filter(|(_, f)| f.kind == FloorKind::SignalContent)
+        .map(|(n, _)| format!("`{n}`"))
+        .collect();
     let mut target = Target {
         model,
         rec,
@@ -1108,7 +1119,8 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
     let best = ranking
         .first()
         .filter(|b| b.error.is_none() && b.score > opts.significance && b.cost < cost_before);
-    if all_at_floor(&judged_before, opts.floor_factor) {
+    let at_floor_before = all_at_floor(&judged_before, opts.floor_factor);
+    if at_floor_before && floor_too_high.is_empty() {
         // At the floor already: whatever a candidate gains is noise.
         verdict = Verdict::NothingMissing;
     } else if ranking.iter().all(|r| r.error.is_some()) {
@@ -1131,13 +1143,47 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         }
         judged_after = judge.judge(&after_weighted);
         if !all_at_floor(&judged_after, opts.floor_factor) && opts.max_effects >= 2 {
-            let second = second_effect(&target, opts, &candidates, &fitted, best, &base_weighted);
+            // The pair may start from any of the few best singles: the best single effect
+            // is not always one of the best pair (a dead zone in the drive beats a contact
+            // drop alone but not beside Coulomb friction). Every pair's gain is taken over
+            // the best single, and the pair that leaves the least is kept.
+            let reference = (fitted.iter())
+                .find(|f| f.candidate.id == best.candidate.id)
+                .map_or(base_weighted.as_slice(), |f| f.weighted.as_slice());
+            let firsts = (ranking.iter())
+                .filter(|r| {
+                    r.error.is_none() && r.score > opts.significance && r.cost < cost_before
+                })
+                .take(PAIR_FIRSTS);
+            let mut second: Option<(Vec<RankedCandidate>, Vec<f64>)> = None;
+            for first in firsts {
+                if cancelled() {
+                    break;
+                }
+                let pair =
+                    second_effect(&target, opts, &candidates, first, reference, &base_weighted);
+                // The pair that leaves the least (maximum likelihood among pairs whose
+                // gain over the best single is significant).
+                let cost = |w: &[f64]| w.iter().map(|r| r * r).sum::<f64>();
+                if let Some(p) = pair
+                    && second.as_ref().is_none_or(|(_, w)| cost(&p.1) < cost(w))
+                {
+                    second = Some(p);
+                }
+            }
             if cancelled() {
                 let why = "interrupted while fitting a second effect on top of the first: no \
                            verdict";
                 return Ok(stopped(why.to_string(), ranking, warnings));
             }
-            if let Some((pair, weighted)) = second {
+            if let Some((mut pair, weighted)) = second {
+                // The pair in the order of each effect's own evidence alone.
+                let single = |id: &str| {
+                    (ranking.iter())
+                        .find(|r| r.candidate.id == id)
+                        .map_or(f64::NEG_INFINITY, |r| r.score)
+                };
+                pair.sort_by(|a, b| single(&b.candidate.id).total_cmp(&single(&a.candidate.id)));
                 chosen = pair;
                 verdict = Verdict::TwoEffects;
                 after_weighted = weighted;
@@ -1146,7 +1192,23 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         }
         if !all_at_floor(&judged_after, opts.floor_factor) {
             verdict = Verdict::Partial;
+        } else if !floor_too_high.is_empty() {
+            verdict = Verdict::Partial;
+            reasons.push(format!(
+                "the error falls to the estimated noise floor of {}, but that floor is likely \
+                 too high (the signal's own fast content is in it): whether anything else is \
+                 missing cannot be judged without the sensor's noise (--noise)",
+                floor_too_high.join(", ")
+            ));
         }
+    } else if at_floor_before {
+        verdict = Verdict::CannotJudge;
+        reasons.push(format!(
+            "no candidate explains anything significant and the residual is within the \
+             estimated noise floor of {}, but that floor is likely too high (the signal's own \
+             fast content is in it): give the sensor's noise (--noise) to judge",
+            floor_too_high.join(", ")
+        ));
     } else {
         verdict = Verdict::Unexplained;
     }
@@ -1268,13 +1330,14 @@ fn order_ranking(ranking: &mut Vec<RankedCandidate>, significance: f64) {
 /// A second effect on top of `best`: every other candidate fitted jointly
 /// with it (both sets of parameters free, the second started from its own
 /// best fit on top of the first). Returns the pair, ranked, and the joint
-/// residual when the best pair's gain over `best` alone is significant.
+/// residual when the best pair's gain over `reference` (the weighted residual
+/// of the best single effect) is significant.
 fn second_effect(
     target: &Target,
     opts: &ExplainOptions,
     candidates: &[Candidate],
-    fitted: &[Fitted],
     best: &RankedCandidate,
+    reference: &[f64],
     base_weighted: &[f64],
 ) -> Option<(Vec<RankedCandidate>, Vec<f64>)> {
     let n = target.n_residuals();
@@ -1334,12 +1397,8 @@ fn second_effect(
     let n_eff2 = target.n_eff(&joint_first.weighted);
     let rhos2 = target.rhos(&joint_first.weighted);
     let k2 = second.candidate.params.len() - target.n_calibration(&second.candidate);
-    let single = fitted
-        .iter()
-        .find(|f| f.candidate.id == best.candidate.id)
-        .map_or(base_weighted, |f| &f.weighted);
     let gain = score(
-        target.whitened_cost(single, &rhos2),
+        target.whitened_cost(reference, &rhos2),
         target.whitened_cost(&joint_first.weighted, &rhos2),
         k2,
         target.n_whitened(),

@@ -42,6 +42,7 @@ pub fn comparison_json(c: &Comparison) -> Value {
                 "mean": finite(o.stats.mean),
                 "noise_floor": finite(o.noise_floor),
                 "noise_given": o.noise_given,
+                "noise_method": o.noise_method,
                 "rms_over_floor": finite(o.rms_over_floor()),
                 "band": finite(o.band),
                 "windows": windows,

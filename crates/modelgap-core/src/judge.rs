@@ -704,6 +704,8 @@ mod tests {
             sigma,
             given: false,
             quantum: None,
+            kind: crate::compare::FloorKind::White,
+            whiteness: None,
         }
     }
 

@@ -170,6 +170,52 @@ pub fn estimate_noise_sigma(values: &[f64]) -> f64 {
     MAD_TO_SIGMA * median(&mut deviations) / THIRD_DIFFERENCE_VARIANCE.sqrt()
 }
 
+/// The lag-1 autocorrelation of a signal's third differences `Δ³x`: how far
+/// the fast part that [`estimate_noise_sigma`] measures is white noise.
+///
+/// For white noise `Δ³x` is a moving average with weights (−1, 3, −3, 1), so its
+/// lag-1 autocorrelation is exactly −15/20 = −0.75. Correlated noise (AR, a
+/// filtered signal, a derivative taken from a smoothed position) shows only its
+/// fastest part there and reads about −0.68 to −0.6; a smooth signal that leaks
+/// into the third differences (an oversampled resonance) pushes it towards +1.
+/// The differences are clipped at three robust standard deviations (a step in
+/// the signal is one large value, not a correlation). `None` for fewer than 16
+/// samples or when most third differences are equal (a staircase).
+///
+/// # Example
+///
+/// ```
+/// # use modelgap_core::residual::third_difference_whiteness;
+/// let mut g = modelgap_core::noise::Gaussian::new(5);
+/// let white: Vec<f64> = (0..4000).map(|_| g.sample()).collect();
+/// assert!((third_difference_whiteness(&white).unwrap() + 0.75).abs() < 0.04);
+/// let resonance: Vec<f64> = (0..4000).map(|k| (0.6 * f64::from(k)).sin()).collect();
+/// assert!(third_difference_whiteness(&resonance).unwrap() > 0.0);
+/// ```
+pub fn third_difference_whiteness(values: &[f64]) -> Option<f64> {
+    if values.len() < 16 {
+        return None;
+    }
+    let d3: Vec<f64> = values
+        .windows(4)
+        .map(|w| w[3] - 3.0 * w[2] + 3.0 * w[1] - w[0])
+        .collect();
+    let mut sorted = d3.clone();
+    let center = median(&mut sorted);
+    let mut deviations: Vec<f64> = d3.iter().map(|d| (d - center).abs()).collect();
+    let spread = MAD_TO_SIGMA * median(&mut deviations);
+    if !(spread > 0.0 && spread.is_finite()) {
+        return None;
+    }
+    let clipped: Vec<f64> = d3
+        .iter()
+        .map(|d| (d - center).clamp(-3.0 * spread, 3.0 * spread))
+        .collect();
+    let c0: f64 = clipped.iter().map(|c| c * c).sum();
+    let c1: f64 = clipped.windows(2).map(|w| w[0] * w[1]).sum();
+    (c0 > 0.0).then(|| (c1 / c0).clamp(-1.0, 1.0))
+}
+
 /// Relative tolerance under which two values of a signal count as the same level in
 /// [`quantisation_step`] (decimal text rounds 0.6 to 0.6000000000000001).
 const LEVEL_TOLERANCE: f64 = 1e-9;

@@ -274,6 +274,13 @@ class OutputComparison:
         """True when the noise floor was given (``noise=``), false when estimated."""
 
     @property
+    def noise_method(self) -> str:
+        """How the noise floor was found and how far to trust it: ``"given"``, ``"white"``
+        (third differences that are white noise), ``"quantised"``, ``"coloured"`` (correlated
+        noise or a filtered signal: likely too low), ``"signal-content"`` (the signal's own
+        fast content: likely too high) or ``"unchecked"``."""
+
+    @property
     def rms_over_floor(self) -> float:
         """``rms`` over ``noise_floor``: about 1 for a right model."""
 
