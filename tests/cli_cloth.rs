@@ -679,3 +679,55 @@ fn an_unreachable_tolerance_is_a_warning_and_the_run_finishes() {
     .unwrap();
     assert!(json["warning"].is_null(), "{json}");
 }
+
+/// Issue 15, item 7: `--noise all=SIGMA` sets every marker coordinate's floor at once (a
+/// `NAME=SIGMA` beside it overrides its output), and compare states 3-D and per-coordinate
+/// RMS.
+#[test]
+fn noise_all_sets_every_marker_coordinate_and_rms_is_given_both_ways() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let scene = format!("{root}/examples/data/cloth_scene.toml");
+    let data = format!("{root}/examples/data/cloth_hidden_effect.csv");
+    let json = |extra: &[&str]| -> serde_json::Value {
+        let mut args = vec!["compare", "--model", &scene, "--data", &data, "--json"];
+        args.extend_from_slice(extra);
+        serde_json::from_str(&ok(&args)).unwrap()
+    };
+    let all = json(&["--noise", "all=0.002"]);
+    let per_coordinate = all["noise_floor_per_coordinate"].as_f64().unwrap();
+    assert!((per_coordinate - 0.002).abs() < 1e-12, "{per_coordinate}");
+    let floor_3d = all["noise_floor"].as_f64().unwrap();
+    assert!((floor_3d - 0.002 * 3f64.sqrt()).abs() < 1e-12, "{floor_3d}");
+    let rms = all["rms"].as_f64().unwrap();
+    let rms_pc = all["rms_per_coordinate"].as_f64().unwrap();
+    assert!((rms_pc - rms / 3f64.sqrt()).abs() < 1e-12);
+    // Every marker's floor is the given one, in 3-D.
+    for m in all["markers"].as_array().unwrap() {
+        let f = m["noise_floor"].as_f64().unwrap();
+        assert!((f - 0.002 * 3f64.sqrt()).abs() < 1e-12, "{m}");
+    }
+    // m0.x overrides `all` for its coordinate, before or after it.
+    for order in [
+        ["--noise", "m0.x=0.01", "--noise", "all=0.002"],
+        ["--noise", "all=0.002", "--noise", "m0.x=0.01"],
+    ] {
+        let mixed = json(&order);
+        let m0 = mixed["markers"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|m| m["id"] == 0)
+            .unwrap();
+        let expected = (0.01f64.powi(2) + 2.0 * 0.002f64.powi(2)).sqrt();
+        assert!(
+            (m0["noise_floor"].as_f64().unwrap() - expected).abs() < 1e-12,
+            "{m0}"
+        );
+    }
+    let text = ok(&["compare", "--model", &scene, "--data", &data]);
+    assert!(
+        text.contains("marker error RMS 64.56 mm 3-D (37.27 mm per coordinate)"),
+        "{text}"
+    );
+    assert!(text.contains("per marker (3-D RMS, mm)"), "{text}");
+}

@@ -56,6 +56,8 @@ pub struct LoopArgs {
     pub hold: HoldArg,
 
     /// The noise floor of a measured output, NAME=SIGMA in the output's unit (repeatable);
+    /// all=SIGMA sets every measured output at once (a cloth's every marker coordinate,
+    /// SIGMA per coordinate), and a NAME=SIGMA beside it overrides it for that output;
     /// outputs without one have it estimated from the recording
     #[arg(long = "noise", value_name = "NAME=SIGMA", value_parser = parse_noise_floor)]
     pub noise: Vec<Assignment>,
@@ -247,11 +249,7 @@ pub fn load_loop(args: &LoopArgs) -> anyhow::Result<Loaded> {
     let (rec, mut notes) = modelgap::load::load_recording_with(path, &model, &args.csv.options())
         .with_context(|| format!("reading recording {}", path.display()))?;
     let model = model.into_model();
-    let noise: BTreeMap<String, f64> = args
-        .noise
-        .iter()
-        .map(|a| (a.name.clone(), a.value))
-        .collect();
+    let noise = noise_floors(&args.noise, model.as_ref(), &rec);
     notes.extend(check_fit(
         model.as_ref(),
         &rec,
@@ -267,6 +265,24 @@ pub fn load_loop(args: &LoopArgs) -> anyhow::Result<Loaded> {
         band_sigmas: args.band_sigmas,
         band_fraction: args.band_fraction,
     })
+}
+
+/// The noise floors of `--noise`: `all=SIGMA` for every output of the model that the
+/// recording measures (unless the model has an output called `all`), then each
+/// `NAME=SIGMA`, which overrides it for its output whatever the order.
+fn noise_floors(given: &[Assignment], model: &dyn Model, rec: &Recording) -> BTreeMap<String, f64> {
+    let outputs = model.outputs();
+    let is_all = |a: &&Assignment| a.name == "all" && !outputs.iter().any(|o| o == "all");
+    let mut noise = BTreeMap::new();
+    if let Some(all) = given.iter().rfind(is_all) {
+        for o in outputs.iter().filter(|o| rec.signal(o).is_some()) {
+            noise.insert(o.clone(), all.value);
+        }
+    }
+    for a in given.iter().filter(|a| !is_all(a)) {
+        noise.insert(a.name.clone(), a.value);
+    }
+    noise
 }
 
 /// Checks that `rec` measures some of the model's outputs and that every given noise floor

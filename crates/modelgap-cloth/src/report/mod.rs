@@ -297,6 +297,19 @@ impl ClothComparison {
         })
     }
 
+    /// [`rms`](Self::rms) per coordinate: the RMS of the x, y and z residuals over
+    /// markers and time, the 3-D RMS / √3 (m).
+    #[must_use]
+    pub fn rms_per_coordinate(&self) -> f64 {
+        self.rms / 3f64.sqrt()
+    }
+
+    /// [`noise_floor`](Self::noise_floor) per coordinate: the 3-D floor / √3 (m).
+    #[must_use]
+    pub fn noise_floor_per_coordinate(&self) -> f64 {
+        self.noise_floor / 3f64.sqrt()
+    }
+
     /// RMS over noise floor: about 1 for a right model.
     #[must_use]
     pub fn rms_over_floor(&self) -> f64 {
@@ -454,6 +467,18 @@ pub fn mm(metres: f64) -> String {
     format!("{} mm", format_number(metres * 1e3))
 }
 
+/// A marker RMS (the 3-D distance, m) in millimetres and, beside it, per coordinate
+/// (the RMS of the x, y and z residuals: the 3-D RMS / √3): `4.2 mm 3-D (2.425 mm per
+/// coordinate)`. Users quote either; every table says which.
+#[must_use]
+pub fn mm3(metres: f64) -> String {
+    format!(
+        "{} 3-D ({} per coordinate)",
+        mm(metres),
+        mm(metres / 3f64.sqrt())
+    )
+}
+
 fn region_text(r: &Region) -> String {
     let pins = match r.pins.as_slice() {
         [] => String::new(),
@@ -464,7 +489,7 @@ fn region_text(r: &Region) -> String {
         ),
     };
     format!(
-        "{} (rows {}–{}, columns {}–{}{pins}): {} over {} marker{}",
+        "{} (rows {}–{}, columns {}–{}{pins}): {} 3-D RMS over {} marker{}",
         r.name,
         r.rows[0],
         r.rows[1],
@@ -506,7 +531,7 @@ pub fn comparison_text(c: &ClothComparison, top: usize) -> String {
     );
     let largest = c.largest().map_or(String::new(), |m| {
         format!(
-            ", largest {} (m{} at {} s)",
+            ", largest distance {} (m{} at {} s)",
             mm(m.max),
             m.id,
             format_number(m.max_time)
@@ -514,10 +539,10 @@ pub fn comparison_text(c: &ClothComparison, top: usize) -> String {
     });
     let _ = writeln!(
         s,
-        "  marker error RMS {} ({:.1}× the noise floor {}){largest}",
-        mm(c.rms),
+        "  marker error RMS {}, {:.1}× the noise floor {}{largest}",
+        mm3(c.rms),
         c.rms_over_floor(),
-        mm(c.noise_floor)
+        mm3(c.noise_floor)
     );
     let worst: Vec<String> = c
         .worst_markers(top)
@@ -533,7 +558,7 @@ pub fn comparison_text(c: &ClothComparison, top: usize) -> String {
             )
         })
         .collect();
-    let _ = writeln!(s, "  worst markers: {}", worst.join(", "));
+    let _ = writeln!(s, "  worst markers: {} (3-D RMS)", worst.join(", "));
     if c.markers.len() <= PER_MARKER_LISTED {
         let all: Vec<String> = c
             .markers
@@ -542,9 +567,9 @@ pub fn comparison_text(c: &ClothComparison, top: usize) -> String {
             .collect();
         for (k, chunk) in all.chunks(6).enumerate() {
             let head = if k == 0 {
-                "  per marker (RMS, mm):"
+                "  per marker (3-D RMS, mm):"
             } else {
-                "                       "
+                "                           "
             };
             let _ = writeln!(s, "{head} {}", chunk.join(", "));
         }
@@ -638,7 +663,7 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
         );
         let _ = writeln!(
             s,
-            "      {}; marker RMS {} → {}",
+            "      {}; marker RMS (3-D) {} → {}",
             if params.is_empty() {
                 "no parameters".to_owned()
             } else {
@@ -656,14 +681,14 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
     }
     let _ = writeln!(s, "\nverdict: {}", verdict_sentence(ex));
     if matches!(ex.verdict, Verdict::CannotJudge | Verdict::Interrupted) {
-        let _ = writeln!(s, "  marker RMS {} (not judged)", mm(before));
+        let _ = writeln!(s, "  marker RMS {} (not judged)", mm3(before));
     } else {
         let _ = writeln!(
             s,
             "  marker RMS {} → {} (noise floor {}, {:.2}× the floor after)",
-            mm(before),
-            mm(after),
-            mm(floor),
+            mm3(before),
+            mm3(after),
+            mm3(floor),
             ratio(after, floor)
         );
     }
@@ -718,12 +743,12 @@ pub fn before_after_text(before: &ClothComparison, after: &ClothComparison) -> S
     };
     let mut s = format!(
         "  marker RMS {} → {} ({}; {:.1}× → {:.1}× the noise floor {}), failure windows {} → {}\n",
-        mm(before.rms),
-        mm(after.rms),
+        mm3(before.rms),
+        mm3(after.rms),
         change(before.rms, after.rms),
         before.rms_over_floor(),
         after.rms_over_floor(),
-        mm(before.noise_floor),
+        mm3(before.noise_floor),
         before.windows.len(),
         after.windows.len()
     );
@@ -801,11 +826,11 @@ pub fn cloth_report(
     let mut table = vec![vec![
         "marker (row, col)".to_owned(),
         "noise floor (mm)".to_owned(),
-        "RMS before (mm)".to_owned(),
+        "3-D RMS before (mm)".to_owned(),
         "largest before (mm)".to_owned(),
     ]];
     if ca.is_some() {
-        table[0].push("RMS after (mm)".to_owned());
+        table[0].push("3-D RMS after (mm)".to_owned());
     }
     let mut rows: Vec<(String, &MarkerError, Option<f64>)> = vec![];
     for m in cb.worst_markers(8) {

@@ -120,13 +120,18 @@ impl Story for ClothModel {
 
     /// The comparison per marker (`rms`, `noise_floor`, `markers` with `id`, `row`, `col`,
     /// `rms`, `max`, `noise_floor`, `regions`, `windows`, `error_over_time`,
-    /// `worst_markers`, `rms_over_floor`) and the recording's `warnings`.
+    /// `worst_markers`, `rms_over_floor`; `rms` and `noise_floor` are of the 3-D distance,
+    /// `rms_per_coordinate` and `noise_floor_per_coordinate` the same per coordinate) and
+    /// the recording's `warnings`.
     fn comparison_json(&self, c: &Comparison) -> Value {
         let Ok(cc) = self.cloth_comparison(c) else {
             return modelgap_core::json::comparison_json(c);
         };
         let mut value = serde_json::to_value(&cc).unwrap_or(Value::Null);
         value["rms_over_floor"] = modelgap_core::json::finite(cc.rms_over_floor());
+        value["rms_per_coordinate"] = modelgap_core::json::finite(cc.rms_per_coordinate());
+        value["noise_floor_per_coordinate"] =
+            modelgap_core::json::finite(cc.noise_floor_per_coordinate());
         value["worst_markers"] = json!(
             cc.worst_markers(TOP_MARKERS)
                 .iter()
