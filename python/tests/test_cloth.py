@@ -115,7 +115,7 @@ def test_neighbouring_pins_are_allowed_and_their_edge_is_not_a_constraint():
     world = ClothWorld()
     world.add_cloth(mesh)
     assert world.n_constraints == mesh.n_edges - 2
-    assert world.step(0.01).converged
+    assert world.step(dt=0.01).converged
 
 
 def test_a_hanging_cloth_holds_its_constraints():
