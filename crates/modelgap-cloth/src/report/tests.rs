@@ -25,6 +25,7 @@ fn output(name: String, t: &[f64], residual: Vec<f64>) -> OutputComparison {
         residual,
         noise_floor: FLOOR,
         noise_given: true,
+        noise_method: Default::default(),
         quantum: None,
         finding: None,
         band: 4.0 * FLOOR,
