@@ -12,13 +12,18 @@
 //! candidate bounds of [`crate::model`] keep to that.
 //!
 //! - **Air drag** on each triangle of area `A` and unit normal `n`, moving at
-//!   the mean velocity `v` of its vertices through air moving at the wind `w`:
-//!   `F = −½ ρ C_d A ((v − w)·n) |(v − w)·n| n`, a third to each vertex. Only
-//!   the normal component of the relative velocity pushes (a sheet sliding
-//!   in its own plane feels no pressure drag); `ρ` is the air density
-//!   ([`AIR_DENSITY`] by default) and `C_d` the drag coefficient.
+//!   the mean velocity `v` of its vertices through air moving at the wind `w`,
+//!   in two parts, a third of each to each vertex. The normal (pressure) part
+//!   `F_n = −½ ρ C_d A u_n |u_n| n`, `u_n = (v − w)·n`, acts on the relative
+//!   velocity across the sheet; the tangential (skin-friction) part
+//!   `F_t = −½ ρ C_f A |u_t| u_t`, `u_t = (v − w) − u_n n`, on the relative
+//!   velocity along it, so a sheet sliding in its own plane (a curtain whose
+//!   rail moves along it) feels drag too. `ρ` is the air density
+//!   ([`AIR_DENSITY`] by default), `C_d` the drag coefficient and `C_f` the
+//!   skin-friction coefficient (0 by default: the normal part alone).
 //! - **Wind**: the same drag with the relative velocity `v − w`; a constant
-//!   wind `w` (m/s) with `C_d > 0` pushes a cloth at rest.
+//!   wind `w` (m/s) with `C_d > 0` pushes a cloth at rest, and with `C_f > 0`
+//!   a wind along the sheet pulls it.
 //! - **Velocity damping**: `F_i = −c m_i v_i` (rate `c`, 1/s), what air
 //!   resistance looks like to a model that ignores the cloth's shape.
 //! - **Bending stiffness**: a linear spring of stiffness `k` (N/m) on each
@@ -104,6 +109,9 @@ pub struct ClothForces {
     pub air_density: f64,
     /// Drag coefficient `C_d` of the cloth's triangles (dimensionless); default 0 (no drag).
     pub drag_coefficient: f64,
+    /// Skin-friction coefficient `C_f` (dimensionless): drag on the velocity along the
+    /// sheet relative to the air; default 0 (none).
+    pub skin_friction: f64,
     /// Wind velocity `w` (m/s): drag acts on the velocity relative to it; default 0.
     pub wind: Vector3<f64>,
     /// Velocity damping rate `c` (1/s): force `−c m v` on each particle; default 0.
@@ -117,6 +125,7 @@ impl Default for ClothForces {
         Self {
             air_density: AIR_DENSITY,
             drag_coefficient: 0.0,
+            skin_friction: 0.0,
             wind: Vector3::zeros(),
             damping: 0.0,
             bend_stiffness: 0.0,
@@ -128,7 +137,10 @@ impl ClothForces {
     /// Whether every term is off (no force besides gravity).
     #[must_use]
     pub fn is_none(&self) -> bool {
-        self.drag_coefficient == 0.0 && self.damping == 0.0 && self.bend_stiffness == 0.0
+        self.drag_coefficient == 0.0
+            && self.skin_friction == 0.0
+            && self.damping == 0.0
+            && self.bend_stiffness == 0.0
     }
 
     /// Writes the forces on a cloth's particles (N) for its current state
@@ -151,8 +163,9 @@ impl ClothForces {
                 *f -= self.damping * m * v;
             }
         }
-        if self.drag_coefficient != 0.0 {
+        if self.drag_coefficient != 0.0 || self.skin_friction != 0.0 {
             let k = 0.5 * self.air_density * self.drag_coefficient;
+            let kt = 0.5 * self.air_density * self.skin_friction;
             for t in triangles {
                 let [a, b, c] = t.map(|i| i as usize);
                 // Twice the area times the unit normal.
@@ -164,8 +177,10 @@ impl ClothForces {
                 let n = n2 / twice_area;
                 let v = (velocities[a] + velocities[b] + velocities[c]) / 3.0 - self.wind;
                 let vn = v.dot(&n);
-                // −½ ρ C_d A (v·n)|v·n| n, a third on each vertex.
-                let f = n * (-k * 0.5 * twice_area * vn * vn.abs() / 3.0);
+                let vt = v - n * vn;
+                // −½ ρ A (C_d (v·n)|v·n| n + C_f |v_t| v_t), a third on each vertex.
+                let area = 0.5 * twice_area;
+                let f = n * (-k * area * vn * vn.abs() / 3.0) - vt * (kt * area * vt.norm() / 3.0);
                 out[a] += f;
                 out[b] += f;
                 out[c] += f;
@@ -270,6 +285,55 @@ mod tests {
         let v = vec![Vector3::new(3.0, 0.0, 0.0); 3];
         forces.evaluate(&x, &v, &[1.0; 3], &tri, &[], &mut out);
         assert!(out.iter().all(|f| f.norm() == 0.0));
+    }
+
+    #[test]
+    fn skin_friction_drags_a_sheet_sliding_in_its_own_plane() {
+        let (x, tri) = square();
+        let forces = ClothForces {
+            drag_coefficient: 1.5,
+            skin_friction: 0.4,
+            ..ClothForces::default()
+        };
+        // Sliding along +x at 3 m/s: ½ ρ C_f A v² against it, nothing across.
+        let v = vec![Vector3::new(3.0, 0.0, 0.0); 3];
+        let mut out = vec![Vector3::zeros(); 3];
+        forces.evaluate(&x, &v, &[1.0; 3], &tri, &[], &mut out);
+        let total: Vector3<f64> = out.iter().sum();
+        approx::assert_relative_eq!(
+            total.x,
+            -0.5 * AIR_DENSITY * 0.4 * 0.5 * 9.0,
+            epsilon = 1e-12
+        );
+        approx::assert_relative_eq!(total.y.abs() + total.z.abs(), 0.0, epsilon = 1e-15);
+        // Moving at 45°: each part sees its own component.
+        let v = vec![Vector3::new(2.0, -2.0, 0.0); 3];
+        forces.evaluate(&x, &v, &[1.0; 3], &tri, &[], &mut out);
+        let total: Vector3<f64> = out.iter().sum();
+        approx::assert_relative_eq!(
+            total.y,
+            0.5 * AIR_DENSITY * 1.5 * 0.5 * 4.0,
+            epsilon = 1e-12
+        );
+        approx::assert_relative_eq!(
+            total.x,
+            -0.5 * AIR_DENSITY * 0.4 * 0.5 * 4.0,
+            epsilon = 1e-12
+        );
+        // A wind along the sheet pulls a sheet at rest the way it moves.
+        let windy = ClothForces {
+            skin_friction: 0.4,
+            wind: Vector3::new(0.0, 0.0, 2.0),
+            ..ClothForces::default()
+        };
+        assert!(!windy.is_none());
+        windy.evaluate(&x, &[Vector3::zeros(); 3], &[1.0; 3], &tri, &[], &mut out);
+        let total: Vector3<f64> = out.iter().sum();
+        approx::assert_relative_eq!(
+            total.z,
+            0.5 * AIR_DENSITY * 0.4 * 0.5 * 4.0,
+            epsilon = 1e-12
+        );
     }
 
     #[test]

@@ -29,6 +29,7 @@
 //! |---|---|---|
 //! | `air-drag` | aerodynamic drag on the cloth's triangles | `drag_coefficient` (1) |
 //! | `wind` | a constant wind (drag on the velocity relative to the air) | (`drag_coefficient`), `wind_x`, `wind_y`, `wind_z` (m/s) |
+//! | `skin-friction` | tangential air drag: skin friction on the velocity along the cloth | `skin_friction` (1) |
 //! | `damping` | velocity damping −c m v | `damping` (1/s) |
 //! | `bending` | bending stiffness (springs on the grid's bend pairs) | `bend_stiffness` (N/m) |
 //! | `compliance` | stretch compliance (the cloth is not quite inextensible) | `compliance` (m/N) |
@@ -511,6 +512,19 @@ pub fn candidates(scene: &Scene) -> Vec<Candidate> {
         acts_on: "cloth".into(),
         params: wind,
     });
+    out.push(Candidate {
+        id: "skin-friction".into(),
+        name: "tangential air drag (skin friction along the cloth)".into(),
+        kind: kind(fx.skin_friction),
+        acts_on: "cloth".into(),
+        params: vec![EffectParam::new(
+            "skin_friction",
+            "1",
+            fx.skin_friction,
+            (0.0, (5.0_f64).max(2.0 * fx.skin_friction)),
+            0.2,
+        )],
+    });
     let max_damping = MAX_DAMPING_STEP / s.dt;
     out.push(Candidate {
         id: "damping".into(),
@@ -669,6 +683,7 @@ fn apply(scene: &mut Scene, candidate: &Candidate, values: &[f64]) -> Result<()>
         known = true;
         match p.name.as_str() {
             "drag_coefficient" => fx.drag_coefficient = v,
+            "skin_friction" => fx.skin_friction = v,
             "wind_x" => fx.wind.x = v,
             "wind_y" => fx.wind.y = v,
             "wind_z" => fx.wind.z = v,

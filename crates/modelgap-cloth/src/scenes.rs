@@ -35,7 +35,8 @@
 //!
 //! [air]                     # optional: aerodynamic drag per triangle (crate::forces)
 //! density = 1.225           # kg/m^3, optional
-//! drag_coefficient = 1.0    # dimensionless
+//! drag_coefficient = 1.0    # dimensionless, on the velocity across the sheet (optional, 0)
+//! skin_friction = 0.0       # optional, dimensionless, on the velocity along the sheet
 //! wind = [0.0, 0.0, 0.0]    # m/s, optional
 //!
 //! [[point_masses]]          # optional, any number: extra mass at a vertex
@@ -181,7 +182,10 @@ struct SceneFile {
 #[serde(deny_unknown_fields)]
 struct AirFile {
     density: Option<f64>,
+    #[serde(default)]
     drag_coefficient: f64,
+    #[serde(default)]
+    skin_friction: f64,
     #[serde(default)]
     wind: [f64; 3],
 }
@@ -766,10 +770,13 @@ impl Scene {
         if fx.damping != 0.0 {
             let _ = writeln!(out, "damping = {}  # 1/s", num(fx.damping));
         }
-        if fx.drag_coefficient != 0.0 || fx.wind != Vector3::zeros() {
+        if fx.drag_coefficient != 0.0 || fx.skin_friction != 0.0 || fx.wind != Vector3::zeros() {
             let _ = writeln!(out, "\n[air]");
             let _ = writeln!(out, "density = {}  # kg/m^3", num(fx.air_density));
             let _ = writeln!(out, "drag_coefficient = {}", num(fx.drag_coefficient));
+            if fx.skin_friction != 0.0 {
+                let _ = writeln!(out, "skin_friction = {}", num(fx.skin_friction));
+            }
             let _ = writeln!(out, "wind = {}  # m/s", vec3(&fx.wind));
         }
         for p in &self.effects.point_masses {
@@ -973,6 +980,7 @@ fn effects_from_file(
     };
     if let Some(air) = &file.air {
         forces.drag_coefficient = non_negative("air.drag_coefficient", air.drag_coefficient)?;
+        forces.skin_friction = non_negative("air.skin_friction", air.skin_friction)?;
         let density = air.density.unwrap_or(AIR_DENSITY);
         if !(density > 0.0 && density.is_finite()) {
             return Err(FieldError::new(
