@@ -85,3 +85,37 @@ fn skin_friction_round_trips_through_the_scene_file() {
     let bad = Scene::from_toml(&text.replace("0.3", "-0.3"), "x").unwrap_err();
     assert!(bad.to_string().contains("air.skin_friction"), "{bad}");
 }
+
+/// explain with the whole menu names skin friction on an in-plane curtain (12 x 12, the
+/// rail moving 0.3 sin(2 pi 0.4 t) m along it, 36 markers, 1 mm noise, hidden C_f = 0.5),
+/// not velocity damping (which the in-plane drag was taken for before).
+#[test]
+fn explain_names_skin_friction_on_an_in_plane_curtain() {
+    use modelgap_core::{ExplainOptions, Verdict, explain};
+    let mut scene = curtain();
+    scene.rails[0].translation =
+        modelgap_cloth::rail::Motion::expressions(["0.3 * sin(2 * pi * 0.4 * t)", "0", "0"])
+            .unwrap();
+    scene.duration = 2.0;
+    let scene = scene.resized(12, 12).unwrap();
+    let markers: Vec<u32> = (0..6)
+        .flat_map(|r| (0..6).map(move |c| (1 + 2 * r) * 12 + 1 + 2 * c))
+        .collect();
+    let case = HiddenCase {
+        name: "skin-friction".into(),
+        scene: scene.clone(),
+        hidden: vec![Hidden {
+            id: "skin-friction".into(),
+            values: vec![0.5],
+        }],
+        markers,
+    };
+    let rec = record(&case, &RecordingOptions::default()).unwrap();
+    let ex = explain(&ClothModel::new(scene), &rec, &ExplainOptions::default()).unwrap();
+    assert_eq!(ex.verdict, Verdict::EffectFound, "{:?}", ex.verdict);
+    assert_eq!(ex.chosen.len(), 1);
+    let found = &ex.chosen[0];
+    assert_eq!(found.candidate.id, "skin-friction");
+    let c_f = found.params[0].value;
+    assert!((c_f - 0.5).abs() < 0.025, "{c_f}");
+}
