@@ -252,3 +252,32 @@ fn a_fault_that_fix_writes_is_a_change_the_file_makes() {
         );
     }
 }
+
+/// An `only` id that is not on the menu, or a number of effects explain cannot choose, is
+/// refused before any fit, naming what is wrong and what the menu offers.
+#[test]
+fn explain_refuses_what_it_cannot_do() {
+    let c = case("coulomb");
+    let rec = record(&c, &RecordingOptions::default()).unwrap();
+    let model = BondModel::new(library::builtin(&c.model).unwrap());
+    let opts = ExplainOptions {
+        only: vec!["coulomb@1m".to_string(), "colomb@1m".to_string()],
+        ..ExplainOptions::default()
+    };
+    let message = explain(&model, &rec, &opts).unwrap_err().to_string();
+    assert!(
+        message.contains("colomb@1m is not on the menu") && message.contains("coulomb@1m,"),
+        "{message}"
+    );
+    for n in [0, 3] {
+        let opts = ExplainOptions {
+            max_effects: n,
+            ..ExplainOptions::default()
+        };
+        let message = explain(&model, &rec, &opts).unwrap_err().to_string();
+        assert!(
+            message.contains("max_effects") && message.contains("1 or 2"),
+            "{message}"
+        );
+    }
+}

@@ -886,9 +886,9 @@ fn py_compare(
 ///   second effect must add, and the margin by which a candidate with more parameters must
 ///   beat a simpler one to rank above it. Default 10 ("very strong evidence").
 /// - ``max_effects``: with 2 (the default) a second effect may be chosen, with 1 at most
-///   one; larger values act as 2 and 0 as 1.
+///   one; other values raise ``DataError``.
 /// - ``only``: the candidate ids to fit (for the second effect too); ``None`` or an empty
-///   list fits all, ids that match no candidate are ignored.
+///   list fits all; an id not on the model's menu raises ``DataError``.
 /// - ``progress``: ``progress(done, total)`` with the candidate fits finished and the
 ///   number to fit, called on the calling thread when the counts changed (polled every
 ///   50 ms, so some counts are skipped); second-effect fits are not counted. An exception

@@ -907,6 +907,36 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             reason: format!("must be at least 1, found {}", opts.floor_factor),
         });
     }
+    if !(1..=2).contains(&opts.max_effects) {
+        return Err(CoreError::InvalidArgument {
+            name: "max_effects",
+            reason: format!(
+                "must be 1 or 2 (effects chosen on top of each other), found {}",
+                opts.max_effects
+            ),
+        });
+    }
+    if !opts.only.is_empty() {
+        let menu: Vec<String> = (model.candidates_for(rec).into_iter())
+            .map(|c| c.id)
+            .collect();
+        let unknown: Vec<&str> = (opts.only.iter())
+            .filter(|o| !menu.contains(o))
+            .map(String::as_str)
+            .collect();
+        if !unknown.is_empty() {
+            return Err(CoreError::InvalidArgument {
+                name: "only",
+                reason: format!(
+                    "{} {} not on the menu of {}; it offers {}",
+                    unknown.join(", "),
+                    if unknown.len() == 1 { "is" } else { "are" },
+                    model.name(),
+                    menu.join(", ")
+                ),
+            });
+        }
+    }
     let shared = shared_outputs(model, rec)?;
     let shared_values: Vec<(&str, &[f64])> = shared
         .iter()

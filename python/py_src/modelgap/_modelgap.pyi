@@ -928,12 +928,11 @@ def explain(
             one to rank above it. Default 10 ("very strong evidence"); not checked.
         max_effects: 2 (the default) lets a second effect be fitted on top of the first
             when the first leaves the residual above the floor; with 1 at most one effect is
-            chosen. Larger values act as 2, and 0 acts as 1 (the best significant candidate
-            is still chosen); a negative value raises ``OverflowError``.
+            chosen. Other values raise ``DataError`` (a negative one ``OverflowError``).
         only: The candidate ids to fit (``"coulomb@1m"``, ``"deviation:R"``); the others
             are skipped, for the second effect too. ``None`` or an empty list fits every
-            candidate. Ids that match no candidate are ignored; when none matches, nothing
-            is fitted and the verdict is ``"unexplained"`` (or ``"nothing-missing"``).
+            candidate. An id that is not on the model's menu raises ``DataError`` naming it
+            and listing the menu.
         progress: Called as ``progress(done, total)`` with the candidate fits finished and
             the number to fit, on the calling thread, polled every 50 ms and only when the
             counts changed (so some counts are skipped; the last call is ``(total, total)``,
