@@ -38,6 +38,7 @@
 //!     stats: modelgap_core::residual::stats(&[0.0; 3], &residual.map(|r| -r)),
 //!     noise_floor: 1e-4,
 //!     noise_given: true,
+//!     noise_method: Default::default(),
 //!     quantum: None,
 //!     band: 4e-4,
 //!     windows: Vec::new(),
