@@ -233,7 +233,7 @@ pub const MAX_HALVINGS: usize = 8;
 pub const COMPRESSION_STIFFNESS: f64 = 0.0;
 
 /// Iterations over which the error must fall by [`STALL_RATIO`], or the step
-/// stops as stagnated (see [`crate::solver::stalled`]).
+/// stops as stagnated (see `solver::stalled`).
 pub const STALL_WINDOW: usize = 30;
 
 /// The factor the smallest error so far must fall by over [`STALL_WINDOW`]

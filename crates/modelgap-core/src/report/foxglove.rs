@@ -47,7 +47,7 @@ pub struct ComparisonChannels<'a> {
 /// and its `log_time` is the sample time, so Foxglove's Plot panel shows
 /// `/measured.i`, `/model.i` and `/model_after.i` side by side on the recording's time axis.
 /// The measured values are written as given; the model's and the residuals are rounded to
-/// [`KEPT_DIGITS`] (7) significant digits of each output's full scale (its largest |value|),
+/// `KEPT_DIGITS` (7) significant digits of each output's full scale (its largest |value|),
 /// 1e-7 of full scale, which keeps the files small.
 /// Every topic reads back with [`crate::io::mcap::read_signals`] (whose times start at the
 /// first message, so they equal `t` when `t` starts at 0).

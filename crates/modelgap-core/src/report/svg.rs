@@ -62,7 +62,7 @@ pub(super) type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 /// the effect, over time, with axes, ticks and a legend; beneath it, on the same time axis,
 /// the residual `measured − model` before and after with the noise band
 /// ([`SeriesPlot::band`]) and the failure windows shaded and numbered; and at the bottom a
-/// zoom on the stretch where the model's error is largest ([`zoom_window`]), so an error
+/// zoom on the stretch where the model's error is largest (`zoom_window`), so an error
 /// smaller than a line width in the full view still shows.
 ///
 /// Long series are decimated (minimum and maximum per pixel column); non-finite values are
