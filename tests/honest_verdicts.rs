@@ -29,7 +29,9 @@ fn story(ex: &Explanation) -> String {
 #[test]
 fn a_lagging_quantised_speed_sensor_is_never_nothing_missing() {
     // A 6 s run, the sensors lagging 3 ms and quantised at 0.4 % of full scale
-    // (about 1 rad/s and 0.1 A): no candidate on the menu has this form.
+    // (about 1 rad/s and 0.1 A): the speed sensor's lag is on the menu (`lag@omega`), and
+    // named; what it leaves — the current sensor's lag under its quantisation — is named
+    // too, never called noise.
     let rec = record(
         &case("nothing"),
         &RecordingOptions {
@@ -46,8 +48,14 @@ fn a_lagging_quantised_speed_sensor_is_never_nothing_missing() {
         "{}",
         story(&ex)
     );
+    let first = ex.chosen.first().expect("the lag is chosen");
+    assert_eq!(first.candidate.id, "lag@omega", "{}", story(&ex));
+    let tau = first.params[0].value;
+    assert!((2e-3..4e-3).contains(&tau), "tau = {tau}\n{}", story(&ex));
     assert!(
-        ex.reasons.iter().any(|r| r.starts_with("omega:")),
+        ex.reasons
+            .iter()
+            .any(|r| r.starts_with("i:") || r.starts_with("omega:")),
         "the residual must be named:\n{}",
         story(&ex)
     );

@@ -17,8 +17,8 @@ use std::fmt;
 use modelgap_core::recording::MAX_MAGNITUDE;
 
 use crate::element::{
-    DeclaredCandidate, Element, ElementKind, InitialState, InputSignal, Law, Output, Parameter,
-    Range, Scheduled, ScheduledChange,
+    DeclaredCandidate, Element, ElementKind, InitialState, InputSignal, Law, Measured, Output,
+    Parameter, Range, Scheduled, ScheduledChange,
 };
 use crate::error::{BondError, Result};
 use crate::expr::Expr;
@@ -294,6 +294,22 @@ impl BondGraph {
             });
         }
         self.outputs.push(output);
+        Ok(())
+    }
+
+    /// Replaces what output `name` measures (a sensor chain an effect adds in
+    /// front of it), keeping its name and unit.
+    ///
+    /// # Errors
+    /// [`BondError::BadOutput`] if no output has that name.
+    pub fn set_output(&mut self, name: &str, measured: Measured) -> Result<()> {
+        let o = (self.outputs.iter_mut().find(|o| o.name == name)).ok_or_else(|| {
+            BondError::BadOutput {
+                output: name.to_string(),
+                detail: "is not an output of the model".to_string(),
+            }
+        })?;
+        o.measured = measured;
         Ok(())
     }
 

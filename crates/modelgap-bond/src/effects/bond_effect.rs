@@ -8,9 +8,9 @@ use super::edit::bad;
 use super::scales::Scales;
 use super::tag::Tag;
 use super::{
-    Brush, Calibration, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault,
-    Faulted, Inertia, Inflow, Junction, Leak, Load, Node, Orifice, Overflow, Saturation, Stiffness,
-    Store, Viscous,
+    ActuatorGain, Brush, Calibration, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation,
+    Factor, Fault, Faulted, Inertia, Inflow, Junction, Leak, Load, Node, Orifice, Overflow,
+    Saturation, SensorLag, Stiffness, Store, Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::BondGraph;
@@ -55,6 +55,10 @@ pub enum BondEffect {
     Store(Store),
     /// `deadzone@<source>`: a dead zone in what a driven source imposes.
     DeadZone(DeadZone),
+    /// `gain@<source>`: a gain on what a driven source imposes.
+    Gain(ActuatorGain),
+    /// `lag@<output>`: a first-order lag in an output's sensor.
+    Lag(SensorLag),
     /// `declared:<name>`: an effect the model file declares.
     Declared(Declared),
     /// `calibration`: the graph's free parameters and initial states (never
@@ -93,6 +97,18 @@ from_kind!(
     Declared,
     Calibration
 );
+
+impl From<ActuatorGain> for BondEffect {
+    fn from(k: ActuatorGain) -> BondEffect {
+        BondEffect::Gain(k)
+    }
+}
+
+impl From<SensorLag> for BondEffect {
+    fn from(k: SensorLag) -> BondEffect {
+        BondEffect::Lag(k)
+    }
+}
 
 impl BondEffect {
     /// Reads a candidate of `g`: its id names the kind and where it acts
@@ -203,6 +219,27 @@ impl BondEffect {
                 })?;
                 Some(BondEffect::DeadZone(d))
             }
+            Tag::Gain => {
+                let k = g.find(target).and_then(|id| ActuatorGain::at(g, id));
+                let k = k.ok_or_else(|| {
+                    bad(
+                        c,
+                        "",
+                        format!("the model has no source '{target}' driven by an input"),
+                    )
+                })?;
+                Some(BondEffect::Gain(k))
+            }
+            Tag::Lag => {
+                let l = SensorLag::named(g, target).ok_or_else(|| {
+                    bad(
+                        c,
+                        "",
+                        format!("the model has no output '{target}' a lag can follow"),
+                    )
+                })?;
+                Some(BondEffect::Lag(l))
+            }
             Tag::Declared => Some(BondEffect::Declared(
                 Declared::named(g, target).ok_or_else(|| {
                     bad(c, "", format!("the model declares no candidate '{target}'"))
@@ -243,6 +280,8 @@ impl BondEffect {
             BondEffect::Orifice(k) => k,
             BondEffect::Store(k) => k,
             BondEffect::DeadZone(k) => k,
+            BondEffect::Gain(k) => k,
+            BondEffect::Lag(k) => k,
             BondEffect::Declared(k) => k,
             BondEffect::Calibration(k) => k,
         }
@@ -270,6 +309,8 @@ impl BondEffect {
             | BondEffect::Orifice(_)
             | BondEffect::Store(_)
             | BondEffect::DeadZone(_)
+            | BondEffect::Gain(_)
+            | BondEffect::Lag(_)
             | BondEffect::Declared(_)
             | BondEffect::Calibration(_) => None,
         }
@@ -324,6 +365,8 @@ impl BondEffect {
             Tag::Orifice => Orifice::vanishing_values(c),
             Tag::Store => Store::vanishing_values(c),
             Tag::DeadZone => DeadZone::vanishing_values(c),
+            Tag::Gain => ActuatorGain::vanishing_values(c),
+            Tag::Lag => SensorLag::vanishing_values(c),
         }
     }
 }

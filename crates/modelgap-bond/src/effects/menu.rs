@@ -7,8 +7,9 @@ use super::bond_effect::BondEffect;
 use super::def::EffectDef;
 use super::scales::Scales;
 use super::{
-    Brush, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault, Inertia,
-    Inflow, Leak, Load, Orifice, Overflow, Saturation, Stiffness, Store, Viscous,
+    ActuatorGain, Brush, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault,
+    Inertia, Inflow, Leak, Load, Orifice, Overflow, Saturation, SensorLag, Stiffness, Store,
+    Viscous,
 };
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
@@ -52,7 +53,10 @@ use crate::graph::{BondGraph, ElementId};
 ///   and pneumatic nodes, `orifice@<n>` (`f = a sign(e) √|e|`, `a` ≥ 0).
 /// - On each source whose value names an input, in any domain:
 ///   `deadzone@<source>` (the value `v` becomes `sign(v) max(|v| − δ, 0)`,
-///   `δ` from 0 to the largest value the source imposed).
+///   `δ` from 0 to the largest value the source imposed), and `gain@<source>`
+///   (the value becomes `k v`, `k` in [0.2, 2]).
+/// - On each output: `lag@<output>` (a first-order lag `τ` in its sensor, from
+///   a tenth of the sample interval to a fifth of the recording; one state).
 /// - Each effect the model file declares (`[[candidates]]`): `declared:<name>`.
 /// - For each electrical I with a linear law: `saturation@<I>`
 ///   (`f = p / L · (1 + a_sat p²)`, `a_sat` ≥ 0 in 1/Wb², scale `0.1 / p_peak²`
@@ -128,6 +132,8 @@ pub fn offered(g: &BondGraph) -> Vec<BondEffect> {
     on_nodes.sort_by_key(|(id, _)| *id);
     out.extend(on_nodes.into_iter().map(|(_, e)| e));
     out.extend(of::<DeadZone>(g));
+    out.extend(of::<ActuatorGain>(g));
+    out.extend(of::<SensorLag>(g));
     out.extend(of::<Declared>(g));
     out
 }

@@ -58,7 +58,9 @@
 //!   [`inflow`](Inflow), [`overflow`](Overflow), [`store`](Store) (a second
 //!   storage behind a resistance: a second thermal mass, a hydraulic
 //!   compliance), and on hydraulic ones [`orifice`](Orifice) (√Δp outflow);
-//! - on a source an input drives, in any domain: [`deadzone`](DeadZone);
+//! - on a source an input drives, in any domain: [`deadzone`](DeadZone) and
+//!   [`gain`](ActuatorGain) (the actuator delivers `k` times its command);
+//! - on every output: [`lag`](SensorLag) (a first-order lag in its sensor);
 //! - declared by the model file (`[[candidates]]`): [`declared`](Declared);
 //! - never on the menu: [`calibration`](Calibration), the graph's own unknowns
 //!   (free parameters and initial states) that calibration fits.
@@ -85,9 +87,11 @@ mod domain;
 mod edit;
 mod factor;
 mod fault;
+mod gain;
 mod inertia;
 mod inflow;
 mod junction;
+mod lag;
 mod leak;
 mod load;
 mod menu;
@@ -121,9 +125,11 @@ pub use deviation::Deviation;
 pub use domain::Domain;
 pub use factor::Factor;
 pub use fault::{Fault, Faulted};
+pub use gain::ActuatorGain;
 pub use inertia::Inertia;
 pub use inflow::Inflow;
 pub use junction::{Junction, junction_domain};
+pub use lag::SensorLag;
 pub use leak::Leak;
 pub use load::Load;
 pub use menu::{candidates, candidates_with, offered};

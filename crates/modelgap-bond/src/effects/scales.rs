@@ -82,6 +82,10 @@ pub struct Scales {
     flow: BTreeMap<ElementId, Level>,
     pub(super) state_peak: BTreeMap<ElementId, f64>,
     pub(super) slowest_rate: Option<f64>,
+    /// The run's sample interval and length (s): the time scales a sensor's
+    /// lag is searched between.
+    pub(super) sample_time: Option<f64>,
+    pub(super) duration: Option<f64>,
 }
 
 impl Scales {
@@ -149,6 +153,13 @@ impl Scales {
     /// `typical`, their RMS as the typical level), and each storage
     /// element's peak state.
     fn measure(&mut self, g: &BondGraph, model: &CompiledModel, run: &Run, typical: bool) {
+        if let (Some(first), Some(last)) = (run.t.first(), run.t.last())
+            && run.t.len() > 1
+            && last > first
+        {
+            self.duration = Some(last - first);
+            self.sample_time = Some((last - first) / (run.t.len() - 1) as f64);
+        }
         let junctions: Vec<ElementId> = g
             .element_ids()
             .filter(|&id| g.element(id).kind.is_junction() || g.element(id).kind.is_source())

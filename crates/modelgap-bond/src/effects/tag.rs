@@ -24,12 +24,14 @@ pub(super) enum Tag {
     Orifice,
     Store,
     DeadZone,
+    Gain,
+    Lag,
     Declared,
     Calibration,
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 19] = [
+const PREFIXES: [(Tag, &str); 21] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -47,6 +49,8 @@ const PREFIXES: [(Tag, &str); 19] = [
     (Tag::Orifice, "orifice@"),
     (Tag::Store, "store@"),
     (Tag::DeadZone, "deadzone@"),
+    (Tag::Gain, "gain@"),
+    (Tag::Lag, "lag@"),
     (Tag::Declared, "declared:"),
     (Tag::Calibration, "calibration"),
 ];
@@ -107,7 +111,7 @@ mod tests {
     fn the_expected_prefixes_read_as_a_list() {
         assert_eq!(
             Tag::expected(),
-            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@ or declared:"
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@, gain@, lag@ or declared:"
         );
     }
 }

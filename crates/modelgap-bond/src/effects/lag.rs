@@ -1,0 +1,131 @@
+//! `lag@<output>`: a sensor that lags — a speed read through a filter, a
+//! thermocouple in its sheath, a pressure through a thin line: the output is
+//! the measured variable `y` passed through a first-order lag `τ ẏ_m = y − y_m`.
+//!
+//! Built as bond-graph signal elements in front of the output: a modulated
+//! flow source `MSf` whose flow is `y` (it reads the output's variable as a
+//! signal and feeds no power back into the plant), a 0-junction, a C of
+//! capacity `τ` and an R with `f = e`, so the 0-junction's effort obeys
+//! `τ ė = y − e`; the output then reads that effort. One new state.
+
+use modelgap_core::{Candidate, EffectKind, EffectParam};
+
+use super::def::EffectDef;
+use super::edit::{added, bad, ident, law, new_param};
+use super::scales::Scales;
+use super::tag::Tag;
+use crate::element::{Element, ElementKind, Law, Measured};
+use crate::error::Result;
+use crate::expr::Expr;
+use crate::graph::BondGraph;
+use crate::simulate::ParamChange;
+
+/// A first-order lag in front of the output at this index of the graph's outputs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SensorLag {
+    /// Index into [`BondGraph::outputs`].
+    pub output: usize,
+}
+
+impl SensorLag {
+    /// The lag on output `name` of `g`, if it has one whose variable reads as a signal.
+    pub fn named(g: &BondGraph, name: &str) -> Option<SensorLag> {
+        let output = g.outputs().iter().position(|o| o.name == name)?;
+        signal_of(g, output).map(|_| SensorLag { output })
+    }
+}
+
+/// The output's variable as a signal expression (`spring.q`, `tank.e`), or
+/// its own expression.
+fn signal_of(g: &BondGraph, output: usize) -> Option<Expr> {
+    let o = g.outputs().get(output)?;
+    match &o.measured {
+        Measured::Effort(x) => Some(Expr::signal(x, "e")),
+        Measured::Flow(x) => Some(Expr::signal(x, "f")),
+        Measured::State(x) => {
+            let var = match g.element(g.find(x)?).kind {
+                ElementKind::I => "p",
+                ElementKind::C => "q",
+                _ => return None,
+            };
+            Some(Expr::signal(x, var))
+        }
+        Measured::Expression(e) => Some(e.clone()),
+    }
+}
+
+impl EffectDef for SensorLag {
+    fn offers(g: &BondGraph) -> Vec<SensorLag> {
+        (0..g.outputs().len())
+            .filter(|&i| signal_of(g, i).is_some())
+            .map(|output| SensorLag { output })
+            .collect()
+    }
+
+    /// `τ` from a tenth of the sample interval to a fifth of the recording,
+    /// starting at one sample interval (scale the same); without a recording
+    /// the interval and length of the model's own start-up.
+    fn candidate(&self, g: &BondGraph, scales: &Scales) -> Candidate {
+        let o = &g.outputs()[self.output];
+        let dt = scales.sample_time.filter(|d| *d > 0.0).unwrap_or(1e-3);
+        let length = scales.duration.filter(|d| *d > dt).unwrap_or(1000.0 * dt);
+        Candidate {
+            id: Tag::Lag.id(&o.name),
+            name: format!("a lag in the sensor of {} (first order)", o.name),
+            kind: EffectKind::MissingElement,
+            acts_on: o.name.clone(),
+            params: vec![EffectParam::new(
+                "tau",
+                "s",
+                dt,
+                (0.1 * dt, (0.2 * length).max(dt)),
+                dt,
+            )],
+        }
+    }
+
+    fn edit(&self, g: &mut BondGraph, c: &Candidate, values: &[f64]) -> Result<Vec<ParamChange>> {
+        let name = g.outputs()[self.output].name.clone();
+        let signal = signal_of(g, self.output).ok_or_else(|| {
+            bad(
+                c,
+                "",
+                format!("output '{name}' reads no variable a lag can follow"),
+            )
+        })?;
+        let suffix = ident(&name);
+        let tau = new_param(
+            g,
+            &format!("tau_{suffix}"),
+            values[0],
+            "s",
+            &format!("time constant of the sensor of {name} {}", added(c)),
+        )?;
+        let node = g.add(
+            Element::zero(&format!("sensor_{suffix}"))
+                .described(&format!("the sensor of {name}: its reading")),
+        )?;
+        let mut source = Element::sf(&format!("sensed_{suffix}"), &tau)
+            .described(&format!("what the sensor of {name} follows"));
+        source.law = Law::Source(signal);
+        let source = g.add(source)?;
+        g.bond(source, node)?;
+        let mut store = Element::c(&format!("lag_{suffix}"), &tau);
+        store.description = "the sensor's lag".to_string();
+        let store = g.add(store)?;
+        g.bond(node, store)?;
+        let leak = g.add(
+            Element::nonlinear(
+                &format!("relax_{suffix}"),
+                ElementKind::R,
+                None,
+                Some(law(c, "e")?),
+            )
+            .described("the sensor relaxing to what it follows"),
+        )?;
+        g.bond(node, leak)?;
+        let node_name = g.element(node).name.clone();
+        g.set_output(&name, Measured::Effort(node_name))?;
+        Ok(Vec::new())
+    }
+}

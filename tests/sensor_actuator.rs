@@ -1,0 +1,96 @@
+//! Sensor and actuator chains are candidates (issue 14): a speed sensor that lags through a
+//! second-order filter (not the candidate's first-order lag) and a motor driver that delivers
+//! less than its command, with a gain that sags at high voltage (not the candidate's constant
+//! gain), hidden in DC-motor recordings with white noise, are named as such — not as "R is
+//! off" or "nothing is missing".
+
+#![allow(clippy::unwrap_used, clippy::expect_used)] // in test helpers, a panic is a test failure
+
+use modelgap::bond::BondModel;
+use modelgap::bond::file::read_model;
+use modelgap::bond::library;
+use modelgap::bond::simulate::{Drive, Hold, Inputs, SimOptions, simulate};
+use modelgap::noise::Gaussian;
+use modelgap::{ExplainOptions, Explanation, Recording, Signal, explain};
+
+const MOTOR: &str = include_str!("../crates/modelgap-bond/models/dc-motor.toml");
+
+/// The motor `truth` driven by a voltage that steps and reverses, 4 s at 1 kHz; `omega`
+/// passed through `sensor` (sample by sample) before white noise is added to both outputs.
+fn recording(truth: &str, sensor: impl Fn(&[f64]) -> Vec<f64>) -> Recording {
+    let g = read_model(truth).unwrap();
+    let t: Vec<f64> = (0..4000).map(|k| k as f64 * 1e-3).collect();
+    let v: Vec<f64> = t
+        .iter()
+        .map(|&t| [6.0, 12.0, -12.0, -4.0, 9.0, 0.0, 3.0, -8.0][(t / 0.5) as usize % 8])
+        .collect();
+    let inputs = Inputs::new().with(
+        "V",
+        Drive::Sampled {
+            t: t.clone(),
+            values: v.clone(),
+            hold: Hold::Zero,
+        },
+    );
+    let run = simulate(&g, &inputs, &t, &SimOptions::default()).unwrap();
+    let mut gauss = Gaussian::new(17);
+    let i: Vec<f64> = (run.output("i").unwrap().iter())
+        .map(|x| x + 0.01 * gauss.sample())
+        .collect();
+    let omega: Vec<f64> = (sensor(run.output("omega").unwrap()).iter())
+        .map(|x| x + 0.2 * gauss.sample())
+        .collect();
+    Recording::new(
+        t,
+        vec![
+            Signal::new("V", v),
+            Signal::new("i", i),
+            Signal::new("omega", omega),
+        ],
+    )
+    .unwrap()
+}
+
+fn explained(rec: &Recording) -> Explanation {
+    let model = BondModel::new(library::dc_motor());
+    explain(&model, rec, &ExplainOptions::default()).unwrap()
+}
+
+#[test]
+fn a_speed_sensor_that_lags_is_named() {
+    // Two first-order stages of 3 ms and 1.5 ms, discretised at 1 kHz.
+    let filter = |y: &[f64]| {
+        let (a1, a2) = ((-1.0f64 / 3.0).exp(), (-1.0f64 / 1.5).exp());
+        let (mut s1, mut s2) = (0.0, 0.0);
+        y.iter()
+            .map(|&x| {
+                s1 = a1 * s1 + (1.0 - a1) * x;
+                s2 = a2 * s2 + (1.0 - a2) * s1;
+                s2
+            })
+            .collect()
+    };
+    let ex = explained(&recording(MOTOR, filter));
+    let text = modelgap::story::explanation_text(&ex, 5);
+    let best = ex.chosen.first().expect("an effect is chosen");
+    assert_eq!(best.candidate.id, "lag@omega", "{text}");
+    let tau = best.params[0].value;
+    // A single lag standing for the two: about their sum.
+    assert!((3e-3..6e-3).contains(&tau), "tau = {tau}\n{text}");
+}
+
+#[test]
+fn a_driver_that_delivers_less_than_its_command_is_named() {
+    let truth = MOTOR.replace(
+        "effort = \"V\"",
+        "effort = \"0.85 * V * (1 - 0.03 * abs(V) / 12)\"",
+    );
+    assert_ne!(truth, MOTOR);
+    let ex = explained(&recording(&truth, <[f64]>::to_vec));
+    let text = modelgap::story::explanation_text(&ex, 5);
+    let best = ex.chosen.first().expect("an effect is chosen");
+    assert_eq!(best.candidate.id, "gain@V", "{text}");
+    let k = best.params[0].value;
+    // Between the gain at 0 V (0.85) and at 12 V (0.82).
+    assert!((0.8..0.86).contains(&k), "k = {k}\n{text}");
+}
