@@ -464,8 +464,11 @@ def test_ctrl_c_stops_a_long_step():
     timer = threading.Timer(0.2, _thread.interrupt_main)
     timer.start()
     try:
+        # Long enough that only Ctrl-C ends it in time, short enough that a lost interrupt
+        # fails the test (pytest.raises) instead of hanging the suite: seen once, under a
+        # cold first run, not reproduced in 9 runs since.
         with pytest.raises(KeyboardInterrupt):
-            world.step(1_000_000, dt=0.001)
+            world.step(30_000, dt=0.001)
     finally:
         timer.cancel()
     assert 0.0 < world.time < 1000.0
