@@ -379,6 +379,18 @@ impl BondGraph {
             })
     }
 
+    /// Parameter `name`, to change, or [`BondError::UnknownParameter`] listing
+    /// the known ones.
+    fn param_mut(&mut self, name: &str) -> Result<&mut Parameter> {
+        let known = self.params.keys().cloned().collect::<Vec<_>>().join(", ");
+        self.params
+            .get_mut(name)
+            .ok_or_else(|| BondError::UnknownParameter {
+                name: name.to_string(),
+                known,
+            })
+    }
+
     /// Marks parameter `name` as unknown, to be fitted within `range` by
     /// calibration (`None`: known again).
     ///
@@ -386,14 +398,7 @@ impl BondGraph {
     /// [`BondError::UnknownParameter`]; [`BondError::BadParameter`] when the
     /// bounds are not finite and ordered or leave out the current value.
     pub fn set_free(&mut self, name: &str, range: Option<Range>) -> Result<()> {
-        let known = self.params.keys().cloned().collect::<Vec<_>>().join(", ");
-        let p = self
-            .params
-            .get_mut(name)
-            .ok_or_else(|| BondError::UnknownParameter {
-                name: name.to_string(),
-                known,
-            })?;
+        let p = self.param_mut(name)?;
         check_range(name, p.value, range)?;
         p.free = range;
         if range.is_none() {
@@ -409,14 +414,7 @@ impl BondGraph {
     /// [`BondError::UnknownParameter`]; [`BondError::BadPrior`] when the
     /// parameter is not free (a prior weighs an unknown value).
     pub fn set_prior(&mut self, name: &str, prior: Option<modelgap_core::Prior>) -> Result<()> {
-        let known = self.params.keys().cloned().collect::<Vec<_>>().join(", ");
-        let p = self
-            .params
-            .get_mut(name)
-            .ok_or_else(|| BondError::UnknownParameter {
-                name: name.to_string(),
-                known,
-            })?;
+        let p = self.param_mut(name)?;
         if prior.is_some() && p.free.is_none() {
             return Err(BondError::BadPrior {
                 name: name.to_string(),
