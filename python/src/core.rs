@@ -516,15 +516,23 @@ pub struct PyFittedParam {
     value: f64,
     /// Standard error (infinite when the parameter sits at a bound).
     std_error: f64,
+    /// ``"lower"`` or ``"upper"`` when the fit ended on that bound, else ``None``.
+    at_bound: Option<String>,
 }
 
 #[pymethods]
 impl PyFittedParam {
     fn __repr__(&self) -> String {
-        format!(
-            "<FittedParam {}={:.4e} ± {:.2e} {}>",
-            self.name, self.value, self.std_error, self.unit
-        )
+        match &self.at_bound {
+            Some(side) => format!(
+                "<FittedParam {}={:.4e} {} (at its {side} bound)>",
+                self.name, self.value, self.unit
+            ),
+            None => format!(
+                "<FittedParam {}={:.4e} ± {:.2e} {}>",
+                self.name, self.value, self.std_error, self.unit
+            ),
+        }
     }
 }
 
@@ -567,6 +575,7 @@ impl PyRankedCandidate {
                 unit: p.unit.clone(),
                 value: p.value,
                 std_error: p.std_error,
+                at_bound: p.at_bound.clone(),
             })
             .collect()
     }
@@ -594,6 +603,17 @@ impl PyRankedCandidate {
     #[getter]
     fn qualitative(&self) -> Option<bool> {
         self.inner.qualitative
+    }
+    /// Why the qualitative diagnosis agrees or disagrees, in plain words ("" when it gives
+    /// no reason).
+    #[getter]
+    fn qualitative_reason(&self) -> &str {
+        &self.inner.qualitative_reason
+    }
+    /// Plain names of other physics this recording cannot tell from this effect.
+    #[getter]
+    fn indistinct(&self) -> Vec<String> {
+        self.inner.indistinct.clone()
     }
     /// Why the fit failed, if it did.
     #[getter]

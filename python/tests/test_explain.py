@@ -183,3 +183,18 @@ def test_explain_many_with_a_process_pool():
         )
     assert parallel == serial
     assert parallel[0].chosen[0].id == "load@1m" and parallel[1].verdict == "nothing-missing"
+
+
+def test_bounds_and_reasons_reach_python(coulomb_explained: modelgap.Explanation):
+    ex = coulomb_explained
+    (tau,) = ex.ranked[0].params
+    assert tau.at_bound is None and math.isfinite(tau.std_error)
+    # Every fit that ended on a bound says which, and gives no standard error.
+    bound = [p for r in ex.ranked for p in r.params if p.at_bound is not None]
+    assert bound, ex.text()
+    assert all(p.at_bound in ("lower", "upper") and math.isinf(p.std_error) for p in bound)
+    assert "bound" in repr(bound[0])
+    # A signature tag comes with its reason in plain words.
+    tagged = [r for r in ex.ranked if r.qualitative is not None]
+    assert tagged and all("fault trees" in r.qualitative_reason for r in tagged), ex.text()
+    assert isinstance(ex.ranked[0].indistinct, list)

@@ -446,6 +446,11 @@ class FittedParam:
         """The standard error of ``value`` (in ``unit``), scaled for the residual's effective
         sample size; infinite when the parameter sits at a bound or the fit failed."""
 
+    @property
+    def at_bound(self) -> Optional[str]:
+        """``"lower"`` or ``"upper"`` when the fit ended on that bound (the value is a limit
+        the fit ran into, not an estimate, and has no standard error), else ``None``."""
+
 @final
 class RankedCandidate:
     """A candidate effect after its fit, with its evidence (an item of
@@ -497,6 +502,17 @@ class RankedCandidate:
     def qualitative(self) -> Optional[bool]:
         """Whether the model's qualitative diagnosis (fault trees, signatures) agrees with the
         effect; ``None`` when it has no opinion or was not asked (only the top five are)."""
+
+    @property
+    def qualitative_reason(self) -> str:
+        """Why the qualitative diagnosis agrees or disagrees, in plain words (which outputs
+        deviated first, what their fault trees point at, how this effect would show); ``""``
+        when it gives no reason."""
+
+    @property
+    def indistinct(self) -> list[str]:
+        """Plain names of other physics this recording cannot tell from this effect: as many
+        parameters, both significant, scores within the significance margin."""
 
     @property
     def error(self) -> Optional[str]:
