@@ -10,8 +10,8 @@ use crate::judge::recording_findings;
 use crate::model::{Model, Prediction};
 use crate::recording::Recording;
 use crate::residual::{
-    FailureWindow, ResidualStats, effective_sample_size, estimate_noise_sigma, failure_windows,
-    quantisation_step, stats, third_difference_whiteness,
+    FailureWindow, ResidualStats, effective_sample_size, failure_windows, quantisation_step, stats,
+    third_difference_stats,
 };
 
 /// Fewest samples from which a noise floor is estimated (third differences
@@ -151,7 +151,7 @@ pub enum FloorKind {
 }
 
 /// Above this lag-1 autocorrelation of the third differences, the signal
-/// itself leaks into them ([`third_difference_whiteness`]; white noise gives
+/// itself leaks into them ([`third_difference_whiteness`](crate::residual::third_difference_whiteness); white noise gives
 /// −0.75, correlated noise about −0.68 to −0.6).
 const SIGNAL_CONTENT_WHITENESS: f64 = -0.45;
 
@@ -173,7 +173,7 @@ pub struct Floor {
     /// How it was found and how far it can be trusted.
     pub kind: FloorKind,
     /// The lag-1 autocorrelation of the measurement's third differences
-    /// ([`third_difference_whiteness`]), when it could be read.
+    /// ([`third_difference_whiteness`](crate::residual::third_difference_whiteness)), when it could be read.
     pub whiteness: Option<f64>,
 }
 
@@ -213,10 +213,10 @@ impl Floor {
 /// added in quadrature. Never 0: a noise-free signal gets a floor of 1e-9
 /// of its RMS (so weights stay finite). Its [`FloorKind`] says whether the
 /// third differences it comes from are white noise
-/// ([`third_difference_whiteness`]).
+/// ([`third_difference_whiteness`](crate::residual::third_difference_whiteness)).
 pub fn noise_floor(name: &str, measured: &[f64], given: &BTreeMap<String, f64>) -> Floor {
     let quantum = quantisation_step(measured);
-    let whiteness = third_difference_whiteness(measured);
+    let (sigma, whiteness) = third_difference_stats(measured);
     if let Some(&sigma) = given.get(name) {
         return Floor {
             sigma,
@@ -226,7 +226,6 @@ pub fn noise_floor(name: &str, measured: &[f64], given: &BTreeMap<String, f64>) 
             whiteness,
         };
     }
-    let sigma = estimate_noise_sigma(measured);
     let rounding = quantum.map_or(0.0, |q| q / 12f64.sqrt());
     let size = crate::residual::rms(measured);
     let white_limit = -0.75 + 4.0 * WHITENESS_SPREAD / (measured.len().max(1) as f64).sqrt();

@@ -916,13 +916,13 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             ),
         });
     }
+    // The menu, once: checked against `only` before any fit, fitted below.
+    let menu = model.candidates_for(rec);
     if !opts.only.is_empty() {
-        let menu: Vec<String> = (model.candidates_for(rec).into_iter())
-            .map(|c| c.id)
-            .collect();
+        let ids: Vec<&str> = menu.iter().map(|c| c.id.as_str()).collect();
         let unknown: Vec<&str> = (opts.only.iter())
-            .filter(|o| !menu.contains(o))
             .map(String::as_str)
+            .filter(|o| !ids.contains(o))
             .collect();
         if !unknown.is_empty() {
             return Err(CoreError::InvalidArgument {
@@ -932,7 +932,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
                     unknown.join(", "),
                     if unknown.len() == 1 { "is" } else { "are" },
                     model.name(),
-                    menu.join(", ")
+                    ids.join(", ")
                 ),
             });
         }
@@ -1044,8 +1044,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
     let free: Vec<&str> = (target.calibration.iter())
         .flat_map(|cal| cal.params.iter().map(|p| p.name.as_str()))
         .collect();
-    let candidates: Vec<Candidate> = model
-        .candidates_for(rec)
+    let candidates: Vec<Candidate> = menu
         .into_iter()
         .filter(|c| opts.only.is_empty() || opts.only.iter().any(|o| o == &c.id))
         // A free parameter "being off" is what calibration already fits.

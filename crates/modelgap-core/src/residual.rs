@@ -157,17 +157,35 @@ impl NoiseFloor {
 /// assert!(estimate_noise_sigma(&x) < 1e-9);
 /// ```
 pub fn estimate_noise_sigma(values: &[f64]) -> f64 {
+    third_difference_stats(values).0
+}
+
+/// What the third differences of `values` say, computed once: the noise σ of
+/// [`estimate_noise_sigma`] and the whiteness of [`third_difference_whiteness`].
+pub fn third_difference_stats(values: &[f64]) -> (f64, Option<f64>) {
     if values.len() < 4 {
-        return 0.0;
+        return (0.0, None);
     }
     debug_assert!(values.iter().all(|v| v.is_finite()));
-    let mut d3: Vec<f64> = values
+    let d3: Vec<f64> = values
         .windows(4)
         .map(|w| w[3] - 3.0 * w[2] + 3.0 * w[1] - w[0])
         .collect();
-    let center = median(&mut d3);
+    let mut sorted = d3.clone();
+    let center = median(&mut sorted);
     let mut deviations: Vec<f64> = d3.iter().map(|d| (d - center).abs()).collect();
-    MAD_TO_SIGMA * median(&mut deviations) / THIRD_DIFFERENCE_VARIANCE.sqrt()
+    let spread = MAD_TO_SIGMA * median(&mut deviations);
+    let sigma = spread / THIRD_DIFFERENCE_VARIANCE.sqrt();
+    if values.len() < 16 || !(spread > 0.0 && spread.is_finite()) {
+        return (sigma, None);
+    }
+    let clipped: Vec<f64> = d3
+        .iter()
+        .map(|d| (d - center).clamp(-3.0 * spread, 3.0 * spread))
+        .collect();
+    let c0: f64 = clipped.iter().map(|c| c * c).sum();
+    let c1: f64 = clipped.windows(2).map(|w| w[0] * w[1]).sum();
+    (sigma, (c0 > 0.0).then(|| (c1 / c0).clamp(-1.0, 1.0)))
 }
 
 /// The lag-1 autocorrelation of a signal's third differences `Δ³x`: how far
@@ -193,27 +211,7 @@ pub fn estimate_noise_sigma(values: &[f64]) -> f64 {
 /// assert!(third_difference_whiteness(&resonance).unwrap() > 0.0);
 /// ```
 pub fn third_difference_whiteness(values: &[f64]) -> Option<f64> {
-    if values.len() < 16 {
-        return None;
-    }
-    let d3: Vec<f64> = values
-        .windows(4)
-        .map(|w| w[3] - 3.0 * w[2] + 3.0 * w[1] - w[0])
-        .collect();
-    let mut sorted = d3.clone();
-    let center = median(&mut sorted);
-    let mut deviations: Vec<f64> = d3.iter().map(|d| (d - center).abs()).collect();
-    let spread = MAD_TO_SIGMA * median(&mut deviations);
-    if !(spread > 0.0 && spread.is_finite()) {
-        return None;
-    }
-    let clipped: Vec<f64> = d3
-        .iter()
-        .map(|d| (d - center).clamp(-3.0 * spread, 3.0 * spread))
-        .collect();
-    let c0: f64 = clipped.iter().map(|c| c * c).sum();
-    let c1: f64 = clipped.windows(2).map(|w| w[0] * w[1]).sum();
-    (c0 > 0.0).then(|| (c1 / c0).clamp(-1.0, 1.0))
+    third_difference_stats(values).1
 }
 
 /// Relative tolerance under which two values of a signal count as the same level in
