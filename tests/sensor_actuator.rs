@@ -94,3 +94,37 @@ fn a_driver_that_delivers_less_than_its_command_is_named() {
     // Between the gain at 0 V (0.85) and at 12 V (0.82).
     assert!((0.8..0.86).contains(&k), "k = {k}\n{text}");
 }
+
+/// An effect id naming a place the model does not have is a typed error that names it.
+#[test]
+fn chain_effects_on_places_the_model_lacks_are_refused() {
+    use modelgap::Model as _;
+    let model = BondModel::new(library::dc_motor());
+    let menu = model.candidates();
+    for (id, target, says) in [
+        ("lag@omega", "lag@speed", "no output 'speed'"),
+        ("gain@V", "gain@R", "no source 'R' driven by an input"),
+        (
+            "deadzone@V",
+            "deadzone@1m",
+            "no source '1m' driven by an input",
+        ),
+    ] {
+        let mut c = menu
+            .iter()
+            .find(|c| c.id == id)
+            .expect("on the menu")
+            .clone();
+        c.id = target.to_string();
+        let effect = modelgap::Effect {
+            values: c.initial(),
+            candidate: c,
+        };
+        let message = model
+            .with_effects(&[effect])
+            .err()
+            .expect(target)
+            .to_string();
+        assert!(message.contains(says), "{target}: {message}");
+    }
+}
