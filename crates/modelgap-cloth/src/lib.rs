@@ -47,6 +47,7 @@
 //! ([`ClothModel`]: a scene as the measurement loop's model), [`hidden`]
 //! (recordings with a hidden effect), [`error`].
 
+pub mod bending;
 pub mod colouring;
 pub mod constraints;
 pub mod contact;
