@@ -171,10 +171,22 @@ fn bench_json_has_every_field() {
         "max_iterations",
         "wall_s",
         "x_real_time",
+        "cpu_s",
+        "x_real_time_cpu",
+        "wall_ms_per_step",
+        "cpu_ms_per_step",
         "threads",
     ] {
         assert!(!json[key].is_null(), "{key} missing in {json}");
     }
+    // CPU and wall time of the same run: both positive, per step consistent.
+    let (cpu, wall) = (
+        json["cpu_s"].as_f64().unwrap(),
+        json["wall_s"].as_f64().unwrap(),
+    );
+    assert!(cpu >= 0.0 && wall > 0.0, "{json}");
+    let per_step = json["cpu_ms_per_step"].as_f64().unwrap();
+    approx::assert_relative_eq!(per_step, 1e3 * cpu / 10.0, max_relative = 1e-9);
     assert_eq!(json["particles"], 100);
     assert_eq!(json["constraints"], 180);
     assert_eq!(json["steps"], 10);

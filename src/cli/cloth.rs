@@ -298,8 +298,20 @@ struct BenchReport {
     fallback_steps: usize,
     /// The stretch tolerance could not be reached: the warning, naming the level held.
     warning: Option<String>,
+    /// Wall-clock time of the run (s): what a user waits, and what a shared machine slows.
     wall_s: f64,
+    /// Simulated seconds per wall-clock second.
     x_real_time: Option<f64>,
+    /// CPU time of the process over the run, every thread, user and system (s); `null`
+    /// where the platform does not report it.
+    cpu_s: Option<f64>,
+    /// Simulated seconds per CPU second: the solver's own speed, which other load on the
+    /// machine does not change (on one thread, the wall-clock factor of an idle machine).
+    x_real_time_cpu: Option<f64>,
+    /// Wall-clock time per step (ms).
+    wall_ms_per_step: f64,
+    /// CPU time per step (ms).
+    cpu_ms_per_step: Option<f64>,
     threads: usize,
     method: &'static str,
     /// `serial` or `coloured`: the Gauss–Seidel sweep order (`none` for
@@ -343,13 +355,16 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         .build()
         .with_context(|| format!("starting a pool of {threads} threads"))?;
     let start = Instant::now();
+    let cpu_start = cpu_seconds();
     let run = pool
         .install(|| run_scene(&scene, &options))
         .map_err(|e| run_error(e, &scene.name))
         .with_context(|| format!("running scene {}", scene.name))?;
     super::interrupt::check("the bench's report not printed")?;
     let wall_s = start.elapsed().as_secs_f64();
+    let cpu_s = cpu_start.zip(cpu_seconds()).map(|(a, b)| b - a);
     let st = run.stats;
+    let per_step = |t: f64| 1e3 * t / st.steps.max(1) as f64;
     let report = BenchReport {
         scene: run.scene,
         particles: st.n_particles,
@@ -365,6 +380,10 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         warning: st.stagnation.map(|s| s.to_string()),
         wall_s,
         x_real_time: real_time_factor(&st, wall_s),
+        cpu_s,
+        x_real_time_cpu: cpu_s.and_then(|c| real_time_factor(&st, c)),
+        wall_ms_per_step: per_step(wall_s),
+        cpu_ms_per_step: cpu_s.map(per_step),
         threads,
         method: match scene.params.method {
             Method::Newton => "newton",
@@ -421,16 +440,41 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     if let Some(w) = &report.warning {
         let _ = writeln!(s, "warning: {w}");
     }
+    let factor = |x: Option<f64>| x.map_or_else(|| "-".to_owned(), |x| format!("{x:.2}"));
     let _ = writeln!(
         s,
-        "wall time {:.3} s for {} s simulated: {} x real time",
+        "wall time {:.3} s for {} s simulated: {} x real time ({:.1} ms per step)",
         report.wall_s,
         num(report.simulated_s),
-        report
-            .x_real_time
-            .map_or_else(|| "-".to_owned(), |x| format!("{x:.2}"))
+        factor(report.x_real_time),
+        report.wall_ms_per_step,
     );
+    if let Some(cpu_s) = report.cpu_s {
+        let _ = writeln!(
+            s,
+            "CPU time {:.3} s (every thread): {} x real time ({:.1} ms per step)",
+            cpu_s,
+            factor(report.x_real_time_cpu),
+            report.cpu_ms_per_step.unwrap_or(f64::NAN),
+        );
+    }
     super::print(&s)
+}
+
+/// CPU time used so far by this process, every thread, user and system (s); `None` where
+/// the platform does not say.
+#[cfg(unix)]
+fn cpu_seconds() -> Option<f64> {
+    use nix::sys::resource::{UsageWho, getrusage};
+    let usage = getrusage(UsageWho::RUSAGE_SELF).ok()?;
+    let secs = |t: nix::sys::time::TimeVal| t.tv_sec() as f64 + t.tv_usec() as f64 * 1e-6;
+    Some(secs(usage.user_time()) + secs(usage.system_time()))
+}
+
+/// CPU time used so far by this process: not measured on this platform.
+#[cfg(not(unix))]
+fn cpu_seconds() -> Option<f64> {
+    None
 }
 
 /// A scene from a file (a path that exists, or ends in `.toml`) or a built-in name.
