@@ -65,7 +65,7 @@
 //!     .iter()
 //!     .map(|p| Vector3::new(r * (p.x / r).sin(), r * (1.0 - (p.x / r).cos()), p.z))
 //!     .collect();
-//! let interior = 0.8 * 0.8; // m², the interior vertices' areas
+//! let interior = 81.0 * 0.1 * 0.1; // m²: 9 x 9 interior vertices, 0.01 m² each
 //! let expected = 0.5 * 0.01 / (r * r) * interior;
 //! assert!((bending.energy(&rolled) / expected - 1.0).abs() < 0.01);
 //! # Ok::<(), modelgap_cloth::ClothError>(())

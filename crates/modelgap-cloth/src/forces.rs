@@ -56,6 +56,7 @@
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
+use crate::material::{Material, MaterialRegion, VertexMaterials};
 use crate::world::{ClothId, ClothWorld};
 
 /// Density of air at 15 °C and sea level (kg/m³).
@@ -237,17 +238,53 @@ pub struct PointMass {
 }
 
 /// The physical terms of a scene beyond gravity and the inextensible
-/// cloth: the forces, the cloth's stretch compliance, extra point masses.
+/// cloth: the forces, the cloth's material (stretch compliance, warp and
+/// weft, quadratic bending, and regions with their own), extra point masses.
 /// All zero (none) by default: the paper's cloth.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ClothEffects {
-    /// Drag, wind, damping, bending.
+    /// Drag, wind, damping, bending springs.
     pub forces: ClothForces,
     /// Compliance of every distance constraint (m/N): stretch per newton
     /// of tension; 0 is inextensible.
     pub compliance: f64,
+    /// Compliance of the links along a row (warp), instead of `compliance` (m/N).
+    pub warp_compliance: Option<f64>,
+    /// Compliance of the links along a column (weft), instead of `compliance` (m/N).
+    pub weft_compliance: Option<f64>,
+    /// Quadratic bending rigidity `B` (N·m, [`crate::bending`]); 0: none.
+    pub bending_rigidity: f64,
+    /// Regions with their own material, laid over the cloth's in order
+    /// ([`crate::material`]).
+    pub materials: Vec<MaterialRegion>,
     /// Extra masses at vertices.
     pub point_masses: Vec<PointMass>,
+}
+
+impl ClothEffects {
+    /// The cloth's own material (the fields of `[cloth]`).
+    #[must_use]
+    pub fn base_material(&self) -> Material {
+        Material {
+            compliance: Some(self.compliance),
+            warp_compliance: self.warp_compliance,
+            weft_compliance: self.weft_compliance,
+            bending_rigidity: Some(self.bending_rigidity),
+            damping: Some(self.forces.damping),
+        }
+    }
+
+    /// Whether the cloth's own compliance sets warp or weft apart.
+    #[must_use]
+    pub fn compliance_is_anisotropic(&self) -> bool {
+        self.warp_compliance.is_some() || self.weft_compliance.is_some()
+    }
+
+    /// Every vertex's material on an `nx × nz` grid.
+    #[must_use]
+    pub fn vertex_materials(&self, nx: usize, nz: usize) -> VertexMaterials {
+        VertexMaterials::resolve(&self.base_material(), &self.materials, nx, nz)
+    }
 }
 
 #[cfg(test)]

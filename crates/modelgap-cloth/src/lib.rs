@@ -57,6 +57,7 @@ pub mod hidden;
 mod kernel;
 pub mod kinematic;
 pub mod markers;
+pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod newton;

@@ -31,8 +31,12 @@
 //! | `wind` | a constant wind (drag on the velocity relative to the air) | (`drag_coefficient`), `wind_x`, `wind_y`, `wind_z` (m/s) |
 //! | `skin-friction` | tangential air drag: skin friction on the velocity along the cloth | `skin_friction` (1; fitted from 3 starts across its bounds) |
 //! | `damping` | velocity damping −c m v | `damping` (1/s) |
-//! | `bending` | bending stiffness (springs on the grid's bend pairs) | `bend_stiffness` (N/m) |
-//! | `compliance` | stretch compliance (the cloth is not quite inextensible) | `compliance` (m/N) |
+//! | `bending` | bending stiffness: the quadratic bending energy ([`crate::bending`]) | `bending_rigidity` (N m) |
+//! | `bend-springs` | (scenes with bend springs) their stiffness is off | `bend_stiffness` (N/m) |
+//! | `compliance` | stretch compliance (the cloth is not quite inextensible) | `compliance`, or `warp_compliance` and `weft_compliance` when the scene sets them apart (m/N) |
+//! | `compliance@{region}` | (per `[[materials]]` region) its stretch compliance | as `compliance` |
+//! | `bending@{region}` | its bending rigidity | `bending_rigidity` (N m) |
+//! | `damping@{region}` | its velocity damping | `damping` (1/s) |
 //! | `mass` | the cloth's total mass is off | `total_mass` (kg) |
 //! | `point-mass` | an extra point mass at a vertex | `col`, `row` (grid starts), `mass` (kg) |
 //! | `friction@collider{k}` | friction on collider k is off | `friction` (1) |
@@ -48,7 +52,9 @@
 //! vertices around a fractional place makes the cost kinked at every
 //! vertex, and the fit stalls beside the true one.) Bounds keep the
 //! explicit forces stable at the scene's step (damping `c h ≤ 0.2`,
-//! bending `k h²/m ≤ 0.25`).
+//! bend springs `k h²/m ≤ 0.25`); quadratic bending is implicit, and its
+//! bound is physics: the rigidity whose bending length `(B/w)^(1/3)` (`w` the
+//! weight per area) is the cloth's width.
 //!
 //! # Example
 //!
@@ -81,6 +87,7 @@ use nalgebra::Vector3;
 use crate::error::{ClothError, Result};
 use crate::forces::PointMass;
 use crate::markers::MarkerRecording;
+use crate::material::Material;
 use crate::scene_world::SceneWorld;
 use crate::scenes::Scene;
 use crate::solver::Method;
@@ -102,8 +109,11 @@ pub const SPREAD_ENVELOPE: usize = 10;
 /// Largest damping rate × step of the `damping` candidate (dimensionless).
 const MAX_DAMPING_STEP: f64 = 0.2;
 
-/// Largest bending stiffness × step² / particle mass of the `bending` candidate.
+/// Largest bending stiffness × step² / particle mass of the `bend-springs` candidate.
 const MAX_BEND_STEP: f64 = 0.25;
+
+/// The `bending` candidates' scale, a fraction of their upper bound.
+const BENDING_SCALE: f64 = 1e-3;
 
 /// How a [`ClothModel`] simulates.
 #[derive(Clone, Debug, PartialEq)]
@@ -450,6 +460,8 @@ struct SceneScales {
     spacing: f64,
     gravity: f64,
     dt: f64,
+    /// The cloth's width (m).
+    size: f64,
 }
 
 impl SceneScales {
@@ -461,7 +473,58 @@ impl SceneScales {
             spacing: c.spacing,
             gravity: scene.params.gravity.norm().max(1e-3),
             dt: scene.dt,
+            size: c.spacing * (c.nx.max(2) - 1) as f64,
         }
+    }
+}
+
+/// The `bending_rigidity` parameter (N·m) at `current`: from 0 to the
+/// rigidity whose bending length `(B / w)^(1/3)` (`w` the cloth's weight per
+/// area) is the cloth's size — a sheet that holds itself out flat over its
+/// whole width; the implicit step is stable for any value
+/// ([`crate::bending`]), so the bound is physics, not the step.
+fn bending_param(s: &SceneScales, current: f64) -> EffectParam {
+    let weight_per_area = s.particle_mass * s.gravity / (s.spacing * s.spacing);
+    let max = weight_per_area * s.size.powi(3);
+    EffectParam::new(
+        "bending_rigidity",
+        "N m",
+        current,
+        (0.0, max.max(2.0 * current)),
+        BENDING_SCALE * max,
+    )
+}
+
+/// The compliance parameters of a material at `current` (its values, those
+/// underneath filled in): `compliance`, or `warp_compliance` and
+/// `weft_compliance` when `declared` (the cloth, or the region) sets warp or
+/// weft apart. Scale: 1 % stretch of a link under the weight of a column of
+/// the grid.
+fn compliance_params(
+    scene: &Scene,
+    s: &SceneScales,
+    current: &Material,
+    declared: &Material,
+) -> Vec<EffectParam> {
+    let column_weight = s.particle_mass * s.gravity * scene.cloth.nz as f64;
+    let scale = 0.01 * s.spacing / column_weight;
+    let param = |name: &str, value: f64| {
+        EffectParam::new(
+            name,
+            "m/N",
+            value,
+            (0.0, (20.0 * scale).max(2.0 * value)),
+            scale,
+        )
+    };
+    let c = current.compliance.unwrap_or(0.0);
+    if declared.is_anisotropic() || scene.effects.compliance_is_anisotropic() {
+        vec![
+            param("warp_compliance", current.warp_compliance.unwrap_or(c)),
+            param("weft_compliance", current.weft_compliance.unwrap_or(c)),
+        ]
+    } else {
+        vec![param("compliance", c)]
     }
 }
 
@@ -545,37 +608,102 @@ pub fn candidates(scene: &Scene) -> Vec<Candidate> {
             max_damping / 40.0,
         )],
     });
-    let max_bend = MAX_BEND_STEP * s.particle_mass / (s.dt * s.dt);
-    out.push(Candidate {
-        id: "bending".into(),
-        name: "bending stiffness (springs on the grid's bend pairs)".into(),
-        kind: kind(fx.bend_stiffness),
-        acts_on: "cloth".into(),
-        params: vec![EffectParam::new(
-            "bend_stiffness",
-            "N/m",
-            fx.bend_stiffness,
-            (0.0, max_bend.max(fx.bend_stiffness)),
-            max_bend / 20.0,
-        )],
-    });
-    // 1 % stretch of a link under the weight of a column of the grid.
-    let column_weight = s.particle_mass * s.gravity * scene.cloth.nz as f64;
-    let compliance_scale = 0.01 * s.spacing / column_weight;
-    let compliance = scene.effects.compliance;
+    let effects = &scene.effects;
+    let bending = |id: String, name: String, acts_on: String, current: f64| Candidate {
+        id,
+        name,
+        kind: kind(current),
+        acts_on,
+        params: vec![bending_param(&s, current)],
+    };
+    out.push(bending(
+        "bending".into(),
+        "bending stiffness (quadratic bending energy about the flat state)".into(),
+        "cloth".into(),
+        effects.bending_rigidity,
+    ));
+    if fx.bend_stiffness > 0.0 {
+        let max_bend = MAX_BEND_STEP * s.particle_mass / (s.dt * s.dt);
+        out.push(Candidate {
+            id: "bend-springs".into(),
+            name: "the bend springs' stiffness is off".into(),
+            kind: EffectKind::ParameterDeviation,
+            acts_on: "cloth".into(),
+            params: vec![EffectParam::new(
+                "bend_stiffness",
+                "N/m",
+                fx.bend_stiffness,
+                (0.0, max_bend.max(fx.bend_stiffness)),
+                max_bend / 20.0,
+            )],
+        });
+    }
+    let base = effects.base_material();
     out.push(Candidate {
         id: "compliance".into(),
-        name: "stretch compliance (the cloth is not quite inextensible)".into(),
-        kind: kind(compliance),
+        name: if base.is_anisotropic() {
+            "stretch compliance, warp and weft (the cloth is not quite inextensible)".into()
+        } else {
+            "stretch compliance (the cloth is not quite inextensible)".into()
+        },
+        kind: kind(
+            effects.compliance.max(
+                base.warp_compliance
+                    .unwrap_or(0.0)
+                    .max(base.weft_compliance.unwrap_or(0.0)),
+            ),
+        ),
         acts_on: "cloth".into(),
-        params: vec![EffectParam::new(
-            "compliance",
-            "m/N",
-            compliance,
-            (0.0, (20.0 * compliance_scale).max(2.0 * compliance)),
-            compliance_scale,
-        )],
+        params: compliance_params(scene, &s, &base, &base),
     });
+    for region in &effects.materials {
+        let m = &region.material;
+        let acts_on = format!("material region \"{}\"", region.name);
+        let under = Material {
+            compliance: m.compliance.or(Some(effects.compliance)),
+            warp_compliance: m.warp_compliance.or(base.warp_compliance),
+            weft_compliance: m.weft_compliance.or(base.weft_compliance),
+            ..m.clone()
+        };
+        let params = compliance_params(scene, &s, &under, m);
+        out.push(Candidate {
+            id: format!("compliance@{}", region.name),
+            name: format!(
+                "stretch compliance{} of region {}",
+                if params.len() == 2 {
+                    ", warp and weft,"
+                } else {
+                    ""
+                },
+                region.name
+            ),
+            kind: kind(params.iter().map(|p| p.initial).fold(0.0, f64::max)),
+            acts_on: acts_on.clone(),
+            params,
+        });
+        let region_b = m.bending_rigidity.unwrap_or(effects.bending_rigidity);
+        out.push(bending(
+            format!("bending@{}", region.name),
+            format!("bending stiffness of region {}", region.name),
+            acts_on.clone(),
+            region_b,
+        ));
+        let region_c = m.damping.unwrap_or(fx.damping);
+        out.push(Candidate {
+            id: format!("damping@{}", region.name),
+            name: format!("velocity damping of region {}", region.name),
+            kind: kind(region_c),
+            acts_on,
+            params: vec![EffectParam::new(
+                "damping",
+                "1/s",
+                region_c,
+                (0.0, max_damping.max(region_c)),
+                max_damping / 40.0,
+            )],
+        });
+    }
+
     let total = s.particle_mass * s.n_vertices as f64;
     out.push(Candidate {
         id: "mass".into(),
@@ -683,6 +811,43 @@ fn apply(scene: &mut Scene, candidate: &Candidate, values: &[f64]) -> Result<()>
         collider.friction = mu;
         return Ok(());
     }
+    if let Some((what, region)) = candidate.id.split_once('@')
+        && matches!(what, "compliance" | "bending" | "damping")
+    {
+        let Some(r) = scene
+            .effects
+            .materials
+            .iter_mut()
+            .find(|r| r.name == region)
+        else {
+            let known: Vec<&str> = scene
+                .effects
+                .materials
+                .iter()
+                .map(|r| r.name.as_str())
+                .collect();
+            return Err(bad(format!(
+                "the scene has no material region \"{region}\" ({})",
+                if known.is_empty() {
+                    "it declares none".to_owned()
+                } else {
+                    format!("known: {}", known.join(", "))
+                }
+            )));
+        };
+        let m = &mut r.material;
+        for (p, &v) in candidate.params.iter().zip(values) {
+            match p.name.as_str() {
+                "compliance" => m.compliance = Some(v),
+                "warp_compliance" => m.warp_compliance = Some(v),
+                "weft_compliance" => m.weft_compliance = Some(v),
+                "bending_rigidity" => m.bending_rigidity = Some(v),
+                "damping" => m.damping = Some(v),
+                other => return Err(bad(format!("unknown parameter {other}"))),
+            }
+        }
+        return Ok(());
+    }
     let fx = &mut scene.effects.forces;
     let mut known = false;
     for (p, &v) in candidate.params.iter().zip(values) {
@@ -696,6 +861,9 @@ fn apply(scene: &mut Scene, candidate: &Candidate, values: &[f64]) -> Result<()>
             "damping" => fx.damping = v,
             "bend_stiffness" => fx.bend_stiffness = v,
             "compliance" => scene.effects.compliance = v,
+            "warp_compliance" => scene.effects.warp_compliance = Some(v),
+            "weft_compliance" => scene.effects.weft_compliance = Some(v),
+            "bending_rigidity" => scene.effects.bending_rigidity = v,
             "total_mass" => scene.cloth.particle_mass = v / (nx * nz) as f64,
             other => return Err(bad(format!("unknown parameter {other}"))),
         }

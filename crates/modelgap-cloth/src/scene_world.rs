@@ -1,6 +1,8 @@
 //! [`SceneWorld`]: a scene's world with the scene's effects in it — stretch
-//! compliance and point masses set once, drag, wind, damping and bending
-//! applied as forces at every step. The one way a scene is stepped: `cloth
+//! compliance (per link, from the materials of [`crate::material`]) and point
+//! masses set once, drag, wind, damping and bending springs applied as forces
+//! at every step, and quadratic bending ([`crate::bending`]) integrated
+//! implicitly over every step. The one way a scene is stepped: `cloth
 //! run` ([`crate::trajectory::run_scene`]) and the measurement loop's
 //! predictions ([`crate::model::simulate_markers`]) both go through it, so a
 //! scene file that `fix` wrote with an `[air]` table runs with its drag
@@ -8,6 +10,7 @@
 
 use nalgebra::Vector3;
 
+use crate::bending::{ImplicitBending, QuadraticBending};
 use crate::error::Result;
 use crate::forces::{BendPair, ClothForces, grid_bend_pairs};
 use crate::markers::MarkerRecording;
@@ -23,6 +26,11 @@ pub struct SceneWorld {
     /// The scene's cloth in it.
     pub cloth: ClothId,
     forces: ClothForces,
+    /// Each vertex's damping rate (1/s) when it differs between vertices
+    /// (`forces.damping` is 0 then).
+    damping: Option<Vec<f64>>,
+    /// Quadratic bending, when any vertex has a rigidity.
+    bending: Option<ImplicitBending>,
     nx: usize,
     nz: usize,
     /// Filled at the first step, from the state then (rest lengths of the
@@ -50,8 +58,14 @@ impl SceneWorld {
     pub fn new(scene: &Scene, pins: Option<&MarkerRecording>) -> Result<SceneWorld> {
         let (mut world, cloth) = scene.build_with_markers(pins)?;
         let effects = &scene.effects;
-        if effects.compliance > 0.0 {
-            world.set_compliance(cloth, effects.compliance)?;
+        let (nx, nz) = (scene.cloth.nx, scene.cloth.nz);
+        let materials = effects.vertex_materials(nx, nz);
+        if effects.materials.is_empty() && !effects.compliance_is_anisotropic() {
+            if effects.compliance > 0.0 {
+                world.set_compliance(cloth, effects.compliance)?;
+            }
+        } else if materials.any_compliance() {
+            world.set_link_compliance(cloth, |a, b| materials.link_compliance(a, b))?;
         }
         for pm in &effects.point_masses {
             let particle = world.particle(cloth, pm.vertex as usize)?;
@@ -60,10 +74,30 @@ impl SceneWorld {
                 world.set_particle_mass(particle, 1.0 / k + pm.mass)?;
             }
         }
+        let mut forces = effects.forces.clone();
+        let damping = match materials.uniform_damping() {
+            Some(c) => {
+                forces.damping = c;
+                None
+            }
+            None => {
+                forces.damping = 0.0;
+                Some(materials.damping.clone())
+            }
+        };
+        let bending = if materials.any_bending() {
+            let mut b = QuadraticBending::new(world.positions(cloth), world.triangles(cloth));
+            b.set_vertex_stiffness(&materials.bending);
+            Some(ImplicitBending::new(b, &cloth_masses(&world, cloth)?))
+        } else {
+            None
+        };
         Ok(SceneWorld {
             world,
             cloth,
-            forces: effects.forces.clone(),
+            forces,
+            damping,
+            bending,
             nx: scene.cloth.nx,
             nz: scene.cloth.nz,
             geometry: None,
@@ -81,17 +115,14 @@ impl SceneWorld {
     /// # Errors
     /// The step's errors ([`ClothWorld::step`]).
     pub fn step(&mut self, h: f64) -> Result<StepReport> {
-        if !self.forces.is_none() {
+        if !self.forces.is_none() || self.damping.is_some() || self.bending.is_some() {
             let (world, cloth) = (&mut self.world, self.cloth);
             let g = match &mut self.geometry {
                 Some(g) => g,
                 None => {
                     let first = world.particle(cloth, 0)?.index();
                     let n = world.positions(cloth).len();
-                    let masses = world.particles().inv_mass[first..first + n]
-                        .iter()
-                        .map(|&k| if k > 0.0 { 1.0 / k } else { 0.0 })
-                        .collect();
+                    let masses = cloth_masses(world, cloth)?;
                     let bend = if self.forces.bend_stiffness > 0.0 {
                         grid_bend_pairs(self.nx, self.nz, world.positions(cloth))
                     } else {
@@ -114,11 +145,37 @@ impl SceneWorld {
                 &g.bend,
                 &mut g.out,
             );
+            if let Some(rates) = &self.damping {
+                let v = world.velocities(cloth);
+                for (((f, v), m), c) in g.out.iter_mut().zip(v).zip(&g.masses).zip(rates) {
+                    *f -= c * m * v;
+                }
+            }
+            if let Some(bending) = &mut self.bending {
+                let gravity = world.params().gravity;
+                bending.add_step_forces(
+                    h,
+                    world.positions(cloth),
+                    world.velocities(cloth),
+                    &gravity,
+                    &mut g.out,
+                )?;
+            }
             let n = g.out.len();
             world.external_forces_mut()[g.first..g.first + n].copy_from_slice(&g.out);
         }
         self.world.step(h)
     }
+}
+
+/// The mass of each of a cloth's vertices (kg; 0 for a pinned one).
+fn cloth_masses(world: &ClothWorld, cloth: ClothId) -> Result<Vec<f64>> {
+    let first = world.particle(cloth, 0)?.index();
+    let n = world.positions(cloth).len();
+    Ok(world.particles().inv_mass[first..first + n]
+        .iter()
+        .map(|&k| if k > 0.0 { 1.0 / k } else { 0.0 })
+        .collect())
 }
 
 #[cfg(test)]

@@ -30,6 +30,9 @@
 //! shear = false             # optional
 //! bend = false              # optional
 //! compliance = 0.0          # optional, m/N per constraint (0: inextensible)
+//! warp_compliance = 0.0     # optional, m/N, links along a row (instead of compliance)
+//! weft_compliance = 0.0     # optional, m/N, links along a column (instead of compliance)
+//! bending_rigidity = 0.0    # optional, N m, quadratic bending (crate::bending)
 //! bend_stiffness = 0.0      # optional, N/m, springs on the bend pairs (crate::forces)
 //! damping = 0.0             # optional, 1/s, velocity damping -c m v
 //!
@@ -38,6 +41,12 @@
 //! drag_coefficient = 1.0    # dimensionless, on the velocity across the sheet (optional, 0)
 //! skin_friction = 0.0       # optional, dimensionless, on the velocity along the sheet
 //! wind = [0.0, 0.0, 0.0]    # m/s, optional
+//!
+//! [[materials]]             # optional, any number: a region with its own material
+//! name = "hem"              # (crate::material); later entries win where they overlap
+//! rows = [28, 29]           # and/or vertices, cols, regions, border, as [[pins.attach]]
+//! compliance = 0.002        # any of compliance, warp_compliance, weft_compliance,
+//! bending_rigidity = 1e-4   # bending_rigidity, damping
 //!
 //! [[point_masses]]          # optional, any number: extra mass at a vertex
 //! vertex = 899
@@ -110,6 +119,7 @@ use crate::error::{ClothError, Result, num};
 use crate::forces::{AIR_DENSITY, ClothEffects, ClothForces, PointMass};
 use crate::kinematic::{PinPath, follow_markers};
 use crate::markers::{MarkerRecording, read_markers_path};
+use crate::material::{MaterialFile, write_materials};
 use crate::mesh::GridCloth;
 use crate::rail::file::{AttachFile, RailFile, Reader};
 use crate::rail::{Rail, RailPins};
@@ -176,6 +186,8 @@ struct SceneFile {
     point_masses: Vec<PointMass>,
     #[serde(default)]
     rails: Vec<RailFile>,
+    #[serde(default)]
+    materials: Vec<MaterialFile>,
 }
 
 #[derive(Deserialize)]
@@ -232,6 +244,10 @@ struct ClothFile {
     bend_stiffness: f64,
     #[serde(default)]
     damping: f64,
+    warp_compliance: Option<f64>,
+    weft_compliance: Option<f64>,
+    #[serde(default)]
+    bending_rigidity: f64,
 }
 
 #[derive(Deserialize)]
@@ -608,7 +624,8 @@ impl Scene {
             }
             rail_pins.push(set);
         }
-        let effects = effects_from_file(&file, n_vertices).map_err(in_scene)?;
+        let mut effects = effects_from_file(&file, n_vertices).map_err(in_scene)?;
+        effects.materials = reader.materials(&file.materials, (c.nx, c.nz))?;
         let colliders = colliders_from_file(&file.colliders, dir).map_err(bad)?;
         Ok(Self {
             name: file.name,
@@ -683,6 +700,9 @@ impl Scene {
             .collect();
         for (v, _) in &mut scene.pin_paths {
             *v = map(*v);
+        }
+        for r in &mut scene.effects.materials {
+            r.vertices = r.vertices.resized((ox, oz), (nx, nz), map);
         }
         for p in &mut scene.rail_pins {
             p.vertices = p.vertices.resized((ox, oz), (nx, nz), map);
@@ -760,6 +780,21 @@ impl Scene {
                 num(self.effects.compliance)
             );
         }
+        for (field, value) in [
+            ("warp_compliance", self.effects.warp_compliance),
+            ("weft_compliance", self.effects.weft_compliance),
+        ] {
+            if let Some(v) = value {
+                let _ = writeln!(out, "{field} = {}  # m/N per link", num(v));
+            }
+        }
+        if self.effects.bending_rigidity != 0.0 {
+            let _ = writeln!(
+                out,
+                "bending_rigidity = {}  # N m, quadratic bending",
+                num(self.effects.bending_rigidity)
+            );
+        }
         if fx.bend_stiffness != 0.0 {
             let _ = writeln!(
                 out,
@@ -779,6 +814,7 @@ impl Scene {
             }
             let _ = writeln!(out, "wind = {}  # m/s", vec3(&fx.wind));
         }
+        write_materials(&mut out, &self.effects.materials);
         for p in &self.effects.point_masses {
             let _ = writeln!(out, "\n[[point_masses]]");
             let _ = writeln!(out, "vertex = {}", p.vertex);
@@ -1011,9 +1047,14 @@ fn effects_from_file(
             ));
         }
     }
+    let optional = |field: &str, v: Option<f64>| v.map(|v| non_negative(field, v)).transpose();
     Ok(ClothEffects {
         forces,
         compliance: non_negative("cloth.compliance", c.compliance)?,
+        warp_compliance: optional("cloth.warp_compliance", c.warp_compliance)?,
+        weft_compliance: optional("cloth.weft_compliance", c.weft_compliance)?,
+        bending_rigidity: non_negative("cloth.bending_rigidity", c.bending_rigidity)?,
+        materials: Vec::new(),
         point_masses: file.point_masses.clone(),
     })
 }

@@ -161,6 +161,15 @@ pub struct RailPins {
     pub vertices: VertexSet,
 }
 
+/// The vertex-set fields of a scene-file entry, as written.
+pub(crate) struct VertexSetFields<'a> {
+    pub(crate) vertices: Option<&'a Spanned<Vec<i64>>>,
+    pub(crate) rows: Option<&'a Spanned<Vec<i64>>>,
+    pub(crate) cols: Option<&'a Spanned<Vec<i64>>>,
+    pub(crate) regions: Option<&'a Spanned<Vec<Vec<i64>>>>,
+    pub(crate) border: bool,
+}
+
 /// The 1-based line of byte `offset` of `text`.
 fn line_of(text: &str, offset: usize) -> usize {
     text.as_bytes()[..offset.min(text.len())]
@@ -177,7 +186,7 @@ pub(crate) struct Reader<'a> {
 }
 
 impl Reader<'_> {
-    fn error(
+    pub(crate) fn error(
         &self,
         span: std::ops::Range<usize>,
         field: String,
@@ -318,6 +327,65 @@ impl Reader<'_> {
             })
     }
 
+    /// The vertex set of an entry `at` (`pins.attach[0]`, `materials[1]`) on an `nx × nz`
+    /// grid: every vertex, row, column and rectangle checked on the grid, an error naming
+    /// its line and field.
+    pub(crate) fn vertex_set(
+        &self,
+        at: &str,
+        fields: VertexSetFields<'_>,
+        (nx, nz): (usize, usize),
+    ) -> Result<VertexSet> {
+        let n = nx * nz;
+        let grid = format!("the {nx} x {nz} grid");
+        let list = |v: Option<&Spanned<Vec<i64>>>, what: &str, below: usize, unit: &str| {
+            let Some(v) = v else { return Ok(Vec::new()) };
+            let mut out = Vec::with_capacity(v.get_ref().len());
+            for (i, &x) in v.get_ref().iter().enumerate() {
+                if x < 0 || x as u64 >= below as u64 {
+                    return Err(self.error(
+                        v.span(),
+                        format!("{at}.{what}[{i}]"),
+                        format!("expected {unit} of {grid} (0 to {}), found {x}", below - 1),
+                    ));
+                }
+                out.push(x as u32);
+            }
+            Ok(out)
+        };
+        let mut set = VertexSet {
+            vertices: list(fields.vertices, "vertices", n, "a vertex")?,
+            rows: list(fields.rows, "rows", nz, "a row")?,
+            cols: list(fields.cols, "cols", nx, "a column")?,
+            regions: Vec::new(),
+            border: fields.border,
+        };
+        if let Some(regions) = fields.regions {
+            for (i, r) in regions.get_ref().iter().enumerate() {
+                let ok = r.len() == 4
+                    && r[0] >= 0
+                    && r[1] >= 0
+                    && r[0] <= r[2]
+                    && r[1] <= r[3]
+                    && (r[2] as u64) < nx as u64
+                    && (r[3] as u64) < nz as u64;
+                if !ok {
+                    return Err(self.error(
+                        regions.span(),
+                        format!("{at}.regions[{i}]"),
+                        format!(
+                            "expected [col0, row0, col1, row1] with 0 <= col0 <= col1 < {nx} \
+                             and 0 <= row0 <= row1 < {nz}, found {r:?}"
+                        ),
+                    ));
+                }
+                set.regions
+                    .push([r[0] as u32, r[1] as u32, r[2] as u32, r[3] as u32]);
+            }
+        }
+        Ok(set)
+    }
+
     /// The attachments of `[[pins.attach]]` on an `nx × nz` grid: each with its vertices
     /// (resolved, checked on the grid) and the field that names it.
     pub(crate) fn attachments(
@@ -345,53 +413,17 @@ impl Reader<'_> {
                     ),
                 ));
             }
-            let n = nx * nz;
-            let grid = format!("the {nx} x {nz} grid");
-            let list = |v: &Option<Spanned<Vec<i64>>>, what: &str, below: usize, unit: &str| {
-                let Some(v) = v else { return Ok(Vec::new()) };
-                let mut out = Vec::with_capacity(v.get_ref().len());
-                for (i, &x) in v.get_ref().iter().enumerate() {
-                    if x < 0 || x as u64 >= below as u64 {
-                        return Err(self.error(
-                            v.span(),
-                            format!("{at}.{what}[{i}]"),
-                            format!("expected {unit} of {grid} (0 to {}), found {x}", below - 1),
-                        ));
-                    }
-                    out.push(x as u32);
-                }
-                Ok(out)
-            };
-            let mut set = VertexSet {
-                vertices: list(&a.vertices, "vertices", n, "a vertex")?,
-                rows: list(&a.rows, "rows", nz, "a row")?,
-                cols: list(&a.cols, "cols", nx, "a column")?,
-                regions: Vec::new(),
-                border: a.border,
-            };
-            if let Some(regions) = &a.regions {
-                for (i, r) in regions.get_ref().iter().enumerate() {
-                    let ok = r.len() == 4
-                        && r[0] >= 0
-                        && r[1] >= 0
-                        && r[0] <= r[2]
-                        && r[1] <= r[3]
-                        && (r[2] as u64) < nx as u64
-                        && (r[3] as u64) < nz as u64;
-                    if !ok {
-                        return Err(self.error(
-                            regions.span(),
-                            format!("{at}.regions[{i}]"),
-                            format!(
-                                "expected [col0, row0, col1, row1] with 0 <= col0 <= col1 < {nx} \
-                                 and 0 <= row0 <= row1 < {nz}, found {r:?}"
-                            ),
-                        ));
-                    }
-                    set.regions
-                        .push([r[0] as u32, r[1] as u32, r[2] as u32, r[3] as u32]);
-                }
-            }
+            let set = self.vertex_set(
+                &at,
+                VertexSetFields {
+                    vertices: a.vertices.as_ref(),
+                    rows: a.rows.as_ref(),
+                    cols: a.cols.as_ref(),
+                    regions: a.regions.as_ref(),
+                    border: a.border,
+                },
+                (nx, nz),
+            )?;
             let vertices = set.resolve(nx, nz);
             if vertices.is_empty() {
                 return Err(self.error(
@@ -468,34 +500,38 @@ pub(crate) fn write_rails(out: &mut String, rails: &[Rail]) {
 
 /// Writes `[[pins.attach]]` entries.
 pub(crate) fn write_attachments(out: &mut String, pins: &[RailPins]) {
-    let list = |v: &[u32]| {
-        let items: Vec<String> = v.iter().map(u32::to_string).collect();
-        format!("[{}]", items.join(", "))
-    };
     for p in pins {
-        let s = &p.vertices;
         let _ = writeln!(out, "\n[[pins.attach]]");
         let _ = writeln!(
             out,
             "rail = {}",
             serde_json::to_string(&p.rail).unwrap_or_default()
         );
-        if !s.vertices.is_empty() {
-            let _ = writeln!(out, "vertices = {}", list(&s.vertices));
-        }
-        if !s.rows.is_empty() {
-            let _ = writeln!(out, "rows = {}", list(&s.rows));
-        }
-        if !s.cols.is_empty() {
-            let _ = writeln!(out, "cols = {}", list(&s.cols));
-        }
-        if !s.regions.is_empty() {
-            let r: Vec<String> = s.regions.iter().map(|r| list(r)).collect();
-            let _ = writeln!(out, "regions = [{}]", r.join(", "));
-        }
-        if s.border {
-            let _ = writeln!(out, "border = true");
-        }
+        write_vertex_set(out, &p.vertices);
+    }
+}
+
+/// Writes the fields of a vertex set (those that are set).
+pub(crate) fn write_vertex_set(out: &mut String, s: &VertexSet) {
+    let list = |v: &[u32]| {
+        let items: Vec<String> = v.iter().map(u32::to_string).collect();
+        format!("[{}]", items.join(", "))
+    };
+    if !s.vertices.is_empty() {
+        let _ = writeln!(out, "vertices = {}", list(&s.vertices));
+    }
+    if !s.rows.is_empty() {
+        let _ = writeln!(out, "rows = {}", list(&s.rows));
+    }
+    if !s.cols.is_empty() {
+        let _ = writeln!(out, "cols = {}", list(&s.cols));
+    }
+    if !s.regions.is_empty() {
+        let r: Vec<String> = s.regions.iter().map(|r| list(r)).collect();
+        let _ = writeln!(out, "regions = [{}]", r.join(", "));
+    }
+    if s.border {
+        let _ = writeln!(out, "border = true");
     }
 }
 

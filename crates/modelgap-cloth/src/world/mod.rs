@@ -214,6 +214,43 @@ impl ClothWorld {
         Ok(())
     }
 
+    /// Sets the compliance of each constraint of a cloth from its two ends:
+    /// `compliance(a, b)` (m/N) for the edge between mesh vertices `a` and `b`
+    /// (materials per region, warp and weft: [`crate::material`]).
+    ///
+    /// # Errors
+    /// [`ClothError::UnknownCloth`], or [`ClothError::BadParameter`] for a
+    /// negative or non-finite compliance (nothing is changed then).
+    pub fn set_link_compliance(
+        &mut self,
+        cloth: ClothId,
+        mut compliance: impl FnMut(u32, u32) -> f64,
+    ) -> Result<()> {
+        let entry = self
+            .cloths
+            .get(cloth.0 as usize)
+            .ok_or(ClothError::UnknownCloth {
+                id: cloth.0,
+                n_cloths: self.cloths.len(),
+            })?;
+        let first = entry.particles.start as u32;
+        let cs = &self.constraints;
+        let values: Vec<f64> = entry
+            .constraints
+            .clone()
+            .map(|k| compliance(cs.a[k] - first, cs.b[k] - first))
+            .collect();
+        if let Some(&bad) = values.iter().find(|a| !(**a >= 0.0 && a.is_finite())) {
+            return Err(ClothError::BadParameter {
+                name: "compliance",
+                expected: "non-negative and finite (m/N)",
+                value: bad,
+            });
+        }
+        self.constraints.compliance[entry.constraints.clone()].copy_from_slice(&values);
+        Ok(())
+    }
+
     /// Adds a static collider.
     pub fn add_collider(&mut self, collider: Collider) -> ColliderId {
         self.colliders.push(collider);
