@@ -177,6 +177,28 @@ pub(crate) struct MaterialFile {
 }
 
 impl Reader<'_> {
+    /// A material value as written: non-negative and finite, or an error
+    /// naming its line and `field`.
+    pub(crate) fn non_negative(
+        &self,
+        value: Option<&Spanned<f64>>,
+        field: &str,
+        unit: &str,
+    ) -> Result<Option<f64>> {
+        match value {
+            Some(s) if !(*s.get_ref() >= 0.0 && s.get_ref().is_finite()) => Err(self.error(
+                s.span(),
+                field.to_owned(),
+                format!(
+                    "expected a non-negative, finite value ({unit}), found {}",
+                    s.get_ref()
+                ),
+            )),
+            Some(s) => Ok(Some(*s.get_ref())),
+            None => Ok(None),
+        }
+    }
+
     /// The regions of `[[materials]]` on an `nx × nz` grid: names unique and
     /// not empty, vertex sets on the grid and not empty, every value
     /// non-negative and finite; an error names the line and the field.
@@ -221,22 +243,9 @@ impl Reader<'_> {
                     "expected vertices, rows, cols, regions or border = true, found no vertex",
                 ));
             }
-            let value =
-                |v: &Option<Spanned<f64>>, field: &str, unit: &str| -> Result<Option<f64>> {
-                    match v {
-                        Some(s) if !(*s.get_ref() >= 0.0 && s.get_ref().is_finite()) => Err(self
-                            .error(
-                                s.span(),
-                                format!("{at}.{field}"),
-                                format!(
-                                    "expected a non-negative, finite value ({unit}), found {}",
-                                    s.get_ref()
-                                ),
-                            )),
-                        Some(s) => Ok(Some(*s.get_ref())),
-                        None => Ok(None),
-                    }
-                };
+            let value = |v: &Option<Spanned<f64>>, field: &str, unit: &str| {
+                self.non_negative(v.as_ref(), &format!("{at}.{field}"), unit)
+            };
             let material = Material {
                 compliance: value(&f.compliance, "compliance", "m/N")?,
                 warp_compliance: value(&f.warp_compliance, "warp_compliance", "m/N")?,

@@ -113,6 +113,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Isometry3, Vector3};
 use serde::Deserialize;
+use toml::Spanned;
 
 use crate::contact::{Collider, Shape};
 use crate::error::{ClothError, Result, num};
@@ -244,10 +245,9 @@ struct ClothFile {
     bend_stiffness: f64,
     #[serde(default)]
     damping: f64,
-    warp_compliance: Option<f64>,
-    weft_compliance: Option<f64>,
-    #[serde(default)]
-    bending_rigidity: f64,
+    warp_compliance: Option<Spanned<f64>>,
+    weft_compliance: Option<Spanned<f64>>,
+    bending_rigidity: Option<Spanned<f64>>,
 }
 
 #[derive(Deserialize)]
@@ -530,8 +530,11 @@ impl Scene {
     /// [`ClothError::SceneField`] for a field out of its range;
     /// [`ClothError::DuplicatePin`] for a vertex pinned twice (in `cloth.pins`,
     /// `pins.paths` or `pins.attach`); [`ClothError::SceneAt`], naming the line and the
-    /// field, for a bad `[[rails]]` or `[[pins.attach]]` entry (an unknown rail name, a
-    /// vertex, row or column past the grid, a malformed row of samples or expression).
+    /// field, for a bad `[[rails]]`, `[[pins.attach]]` or `[[materials]]` entry (an unknown
+    /// rail name, a vertex, row or column past the grid, a malformed row of samples or
+    /// expression, a material region named twice or without vertices, a negative or
+    /// non-finite material value) or a negative `cloth.warp_compliance`,
+    /// `cloth.weft_compliance` or `cloth.bending_rigidity`.
     pub fn from_toml(text: &str, label: &str) -> Result<Self> {
         Self::from_toml_in(text, label, None)
     }
@@ -625,6 +628,13 @@ impl Scene {
             rail_pins.push(set);
         }
         let mut effects = effects_from_file(&file, n_vertices).map_err(in_scene)?;
+        let value = |v: &Option<Spanned<f64>>, field: &str, unit: &str| {
+            reader.non_negative(v.as_ref(), field, unit)
+        };
+        effects.warp_compliance = value(&c.warp_compliance, "cloth.warp_compliance", "m/N")?;
+        effects.weft_compliance = value(&c.weft_compliance, "cloth.weft_compliance", "m/N")?;
+        effects.bending_rigidity =
+            value(&c.bending_rigidity, "cloth.bending_rigidity", "N m")?.unwrap_or(0.0);
         effects.materials = reader.materials(&file.materials, (c.nx, c.nz))?;
         let colliders = colliders_from_file(&file.colliders, dir).map_err(bad)?;
         Ok(Self {
@@ -1047,13 +1057,12 @@ fn effects_from_file(
             ));
         }
     }
-    let optional = |field: &str, v: Option<f64>| v.map(|v| non_negative(field, v)).transpose();
     Ok(ClothEffects {
         forces,
         compliance: non_negative("cloth.compliance", c.compliance)?,
-        warp_compliance: optional("cloth.warp_compliance", c.warp_compliance)?,
-        weft_compliance: optional("cloth.weft_compliance", c.weft_compliance)?,
-        bending_rigidity: non_negative("cloth.bending_rigidity", c.bending_rigidity)?,
+        warp_compliance: None,
+        weft_compliance: None,
+        bending_rigidity: 0.0,
         materials: Vec::new(),
         point_masses: file.point_masses.clone(),
     })
