@@ -1784,9 +1784,11 @@ type ClothModelState = (
 /// ``ClothModel(scene)`` or ``ClothModel.load(path)`` (a scene file); ``method``,
 /// ``stretch_tolerance`` (None: the scene's), ``max_iterations`` and ``step_divisor`` set
 /// how it simulates. It predicts by running the scene from its start (simulated time 0 is
-/// recording time 0). Its candidate effects: air drag, wind, damping, bending, stretch
-/// compliance, the cloth's mass, a point mass, collider friction. ``with_effects``
-/// returns a new model.
+/// recording time 0). Its candidate effects: air drag, skin friction, wind, damping,
+/// bending (the quadratic bending rigidity, N m), stretch compliance (warp and weft apart
+/// when the scene sets them apart), the cloth's mass, a point mass, collider friction, and
+/// per ``[[materials]]`` region ``R`` of the scene its compliance, bending and damping
+/// (``compliance@R``, ``bending@R``, ``damping@R``). ``with_effects`` returns a new model.
 #[pyclass(name = "ClothModel", module = "modelgap.cloth", frozen)]
 pub struct PyClothModel {
     /// The model as built, before `effects`.

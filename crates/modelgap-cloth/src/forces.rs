@@ -1,6 +1,9 @@
 //! External force terms beyond gravity: aerodynamic drag and wind, velocity
-//! damping, bending stiffness; and the other physical terms a scene may hold
-//! ([`ClothEffects`]: stretch compliance, extra point masses).
+//! damping, bending springs; and the other physical terms a scene may hold
+//! ([`ClothEffects`]: stretch compliance, warp and weft, quadratic bending,
+//! materials per region ([`crate::material`]), extra point masses).
+//! Quadratic bending ([`crate::bending`]) is not here: it is integrated
+//! implicitly over the step, by [`crate::scene_world::SceneWorld`].
 //!
 //! As gravity in the paper, every force here is **evaluated at the start of a
 //! step from the positions and velocities, and held constant over the step**:
@@ -26,14 +29,16 @@
 //!   a wind along the sheet pulls it.
 //! - **Velocity damping**: `F_i = −c m_i v_i` (rate `c`, 1/s), what air
 //!   resistance looks like to a model that ignores the cloth's shape.
-//! - **Bending stiffness**: a linear spring of stiffness `k` (N/m) on each
+//! - **Bending springs** (`bend_stiffness`; kept for the scene files that use
+//!   them — the bending law is [`crate::bending`]): a linear spring of stiffness `k` (N/m) on each
 //!   *bend pair* of a grid — vertices two apart along a row or a column,
 //!   rest length their initial distance. An inextensible cloth can only fold,
 //!   and folding brings a bend pair closer, so the spring pushes it back
 //!   apart: `F_a = −k (|x_a − x_b| − L) (x_a − x_b)/|x_a − x_b|`, `F_b = −F_a`.
 //!   Pairs are only pushed apart, never pulled together beyond `L`
-//!   (inextensible structural edges hold that anyway). This is the simplest
-//!   bending model that works on any grid; it is not a dihedral-angle energy.
+//!   (inextensible structural edges hold that anyway). They have no stiffness
+//!   about a flat sheet (a pair of a flat row is at its rest length to first
+//!   order in a fold) and, explicit, need `k h²/m ≪ 1`.
 //!
 //! # Example
 //!

@@ -43,7 +43,9 @@
 //! vertices ride, its motion an expression of `t` or samples), [`markers`] ([`MarkerRecording`], marker CSV and
 //! MCAP files), [`scenes`] (the reference scenes), [`trajectory`] (running a
 //! scene, its recorded frames and Foxglove MCAP), [`forces`] (drag, wind,
-//! damping, bending: [`ClothForces`]; a scene's [`ClothEffects`]), [`model`]
+//! damping, bending springs: [`ClothForces`]; a scene's [`ClothEffects`]),
+//! [`bending`] (quadratic bending, integrated implicitly), [`material`]
+//! (materials per region: compliance, warp and weft, bending, damping), [`model`]
 //! ([`ClothModel`]: a scene as the measurement loop's model), [`hidden`]
 //! (recordings with a hidden effect), [`error`].
 

@@ -2590,8 +2590,11 @@ class ClothModel:
     What ``modelgap.compare``, ``modelgap.explain`` and ``modelgap.fix`` hold against a
     ``Recording`` of marker signals ``m{id}.x|y|z`` (``MarkerRecording.to_recording()``). It
     predicts by running the scene from its start (simulated time 0 is recording time 0). Its
-    candidate effects: air drag, wind, damping, bending, stretch compliance, the cloth's mass,
-    a point mass, collider friction. ``with_effects`` returns a new model. Models pickle.
+    candidate effects: air drag, skin friction, wind, damping, bending (the quadratic bending
+    rigidity, N m), stretch compliance (warp and weft apart when the scene sets them apart),
+    the cloth's mass, a point mass, collider friction, and per ``[[materials]]`` region ``R``
+    of the scene its compliance, bending and damping (``compliance@R``, ``bending@R``,
+    ``damping@R``). ``with_effects`` returns a new model. Models pickle.
     """
 
     def __new__(
