@@ -393,3 +393,50 @@ fn bending_is_fitted_across_five_decades() {
         assert!((b_found / b - 1.0).abs() < 0.05, "{b}: {b_found}");
     }
 }
+
+/// Each region's own damping and bending candidates fit what the region hides (the left
+/// half damped at 1.5 /s; the left half bending at 2e-3 N m), each alone on the menu.
+#[test]
+fn a_regions_damping_and_bending_are_fitted() {
+    use modelgap_core::{ExplainOptions, explain};
+    let scene = swinging_curtain();
+    let w = weight_per_area(&scene);
+    for (id, truth, to_value) in [
+        (
+            "damping@left",
+            1.5,
+            (|v: f64, _w: f64| v) as fn(f64, f64) -> f64,
+        ),
+        ("bending@left", 2e-3, |c: f64, w: f64| w * c.powi(3)),
+    ] {
+        let hidden = if id == "bending@left" {
+            length(truth)
+        } else {
+            truth
+        };
+        let case = HiddenCase {
+            name: id.into(),
+            scene: scene.clone(),
+            hidden: vec![Hidden {
+                id: id.into(),
+                values: vec![hidden],
+            }],
+            markers: markers(),
+        };
+        let rec = record(&case, &RecordingOptions::default()).unwrap();
+        let model = ClothModel::new(scene.clone());
+        let options = ExplainOptions {
+            only: vec![id.into()],
+            ..ExplainOptions::default()
+        };
+        let ex = explain(&model, &rec, &options).unwrap();
+        let found = to_value(ex.ranked[0].params[0].value, w);
+        println!(
+            "{id}: hidden {truth}, found {found:.4e}, {:?}, nominal {:.3} mm",
+            ex.verdict,
+            1e3 * rms(&model, &rec, &[])
+        );
+        assert_eq!(ex.verdict, modelgap_core::Verdict::EffectFound);
+        assert!((found / truth - 1.0).abs() < 0.1, "{id}: {found}");
+    }
+}
