@@ -312,44 +312,72 @@ fn the_stiffest_bending_on_the_menu_runs_stably() {
     assert!(sag.is_finite() && sag < 0.2, "{sag}");
 }
 
-/// Warp and weft: the curtain's scene sets them apart (both 0: declared, inextensible) and
-/// its truth stretches along its columns only (weft 4e-3 m/N); the compliance candidate
-/// fits both apart. (The rows of a hanging curtain carry almost no tension, so a warp
-/// compliance hardly shows in it: the fit leaves warp at 0.)
+/// The swinging curtain turned a quarter within its plane: its columns run along the rail
+/// (column 0 rides it) and its rows hang, so the warp carries the weight.
+fn turned_curtain() -> Scene {
+    use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion};
+    let mut scene = swinging_curtain();
+    scene.effects.materials.clear();
+    // Grid x (warp) along -y, grid z (weft) along x.
+    let r = Rotation3::from_matrix_unchecked(Matrix3::new(
+        0.0, 0.0, 1.0, //
+        -1.0, 0.0, 0.0, //
+        0.0, -1.0, 0.0,
+    ));
+    scene.cloth.world_from_local = Isometry3::from_parts(
+        Translation3::identity(),
+        UnitQuaternion::from_rotation_matrix(&r),
+    );
+    scene.rail_pins[0].vertices = modelgap_cloth::rail::VertexSet {
+        cols: vec![0],
+        ..Default::default()
+    };
+    scene.cloth.pinned = (0..24).map(|row| row * 24).collect();
+    scene
+}
+
+/// Warp and weft: the scene sets them apart (both 0: declared, inextensible) and the truth
+/// stretches one direction (4e-3 m/N); the compliance candidate fits the one that carries
+/// the weight — the weft of the hanging curtain, the warp of the turned one. (The other
+/// direction carries almost no tension and hardly shows: its fitted value is not checked.)
 #[test]
 fn warp_and_weft_compliance_are_fitted_apart() {
     use modelgap_core::{ExplainOptions, explain};
-    let mut scene = swinging_curtain();
-    scene.effects.materials.clear();
-    scene.effects.warp_compliance = Some(0.0);
-    scene.effects.weft_compliance = Some(0.0);
-    let weft = 4e-3;
-    let case = HiddenCase {
-        name: "weft".into(),
-        scene: scene.clone(),
-        hidden: vec![Hidden {
-            id: "compliance".into(),
-            values: vec![0.0, weft],
-        }],
-        markers: markers(),
-    };
-    let rec = record(&case, &RecordingOptions::default()).unwrap();
-    let model = ClothModel::new(scene);
-    let options = ExplainOptions {
-        only: vec!["compliance".into()],
-        ..ExplainOptions::default()
-    };
-    let ex = explain(&model, &rec, &options).unwrap();
-    let found = &ex.ranked[0];
-    let values: Vec<f64> = found.params.iter().map(|p| p.value).collect();
-    println!(
-        "warp, weft: {values:?} (truth 0, {weft}); rms nominal {:.3} mm, fitted {:.3}",
-        1e3 * rms(&model, &rec, &[]),
-        1e3 * rms(&model, &rec, &[("compliance", &values)])
-    );
-    assert_eq!(found.candidate.id, "compliance");
-    assert!(values[0] < 0.1 * weft, "{values:?}");
-    assert!((values[1] / weft - 1.0).abs() < 0.1, "{values:?}");
+    let c = 4e-3;
+    for (name, mut scene, hidden, loaded) in [
+        ("weft, hanging", swinging_curtain(), [0.0, c], 1),
+        ("warp, turned", turned_curtain(), [c, 0.0], 0),
+    ] {
+        scene.effects.materials.clear();
+        scene.effects.warp_compliance = Some(0.0);
+        scene.effects.weft_compliance = Some(0.0);
+        let case = HiddenCase {
+            name: name.into(),
+            scene: scene.clone(),
+            hidden: vec![Hidden {
+                id: "compliance".into(),
+                values: hidden.to_vec(),
+            }],
+            markers: markers(),
+        };
+        let rec = record(&case, &RecordingOptions::default()).unwrap();
+        let model = ClothModel::new(scene);
+        let options = ExplainOptions {
+            only: vec!["compliance".into()],
+            ..ExplainOptions::default()
+        };
+        let ex = explain(&model, &rec, &options).unwrap();
+        let found = &ex.ranked[0];
+        let values: Vec<f64> = found.params.iter().map(|p| p.value).collect();
+        println!(
+            "{name}: warp, weft {values:?} (truth {hidden:?}); rms nominal {:.3} mm, fitted {:.3}",
+            1e3 * rms(&model, &rec, &[]),
+            1e3 * rms(&model, &rec, &[("compliance", &values)])
+        );
+        assert_eq!(found.candidate.id, "compliance");
+        assert_eq!(ex.verdict, modelgap_core::Verdict::EffectFound);
+        assert!((values[loaded] / c - 1.0).abs() < 0.1, "{values:?}");
+    }
 }
 
 /// The bending fit across five decades of rigidity, from a fabric whose bending length is
@@ -439,4 +467,42 @@ fn a_regions_damping_and_bending_are_fitted() {
         assert_eq!(ex.verdict, modelgap_core::Verdict::EffectFound);
         assert!((found / truth - 1.0).abs() < 0.1, "{id}: {found}");
     }
+}
+
+/// fix writes what it fitted into the scene file: a region's compliance into its
+/// `[[materials]]` entry, bending as `bending_rigidity = w c^3`, warp and weft into `[cloth]`.
+#[test]
+fn fitted_materials_are_written_to_the_scene_file() {
+    use modelgap_core::Effect;
+    let scene = swinging_curtain();
+    let model = ClothModel::new(scene.clone());
+    let menu = model.candidates();
+    let pick = |id: &str| menu.iter().find(|c| c.id == id).unwrap().clone();
+    let effects = vec![
+        Effect {
+            candidate: pick("compliance@left"),
+            values: vec![2e-3],
+        },
+        Effect {
+            candidate: pick("bending"),
+            values: vec![0.1],
+        },
+    ];
+    let fixed = model.with_effects(&effects).unwrap();
+    let text = fixed.to_file_text().unwrap();
+    let back = Scene::from_toml(&text, "fixed.toml").unwrap();
+    assert_eq!(back.effects.materials[0].name, "left");
+    assert_eq!(back.effects.materials[0].material.compliance, Some(2e-3));
+    let b = back.effects.bending_rigidity;
+    approx::assert_relative_eq!(b, weight_per_area(&scene) * 1e-3, max_relative = 1e-12);
+    assert!(text.contains("bending_rigidity = "), "{text}");
+    // Warp and weft, once declared, are written back even at 0.
+    let mut aniso = scene.clone();
+    aniso.effects.warp_compliance = Some(0.0);
+    aniso.effects.weft_compliance = Some(1e-3);
+    let back = Scene::from_toml(&aniso.to_toml().unwrap(), "aniso.toml").unwrap();
+    assert_eq!(
+        (back.effects.warp_compliance, back.effects.weft_compliance),
+        (Some(0.0), Some(1e-3))
+    );
 }
