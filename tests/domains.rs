@@ -335,7 +335,12 @@ fn hidden_convection_is_named_heat_loss_to_ambient_from_the_plate() {
     );
     let ex = explained(ROOM, &rec);
     let best = &ex.chosen.first().expect("an effect is chosen").candidate;
-    assert_eq!(best.id, "leak@plate", "chose {} ({})", best.id, best.name);
+    assert_eq!(
+        best.id,
+        "leak@plate",
+        "{}",
+        modelgap::story::explanation_text(&ex, 6)
+    );
     assert!(
         best.name.starts_with("heat loss to ambient"),
         "{}",
@@ -479,9 +484,10 @@ fn a_declared_candidate_is_ranked_with_the_menu_and_fix_builds_it_in() {
     let ex = explain(&model, &rec, &ExplainOptions::default()).unwrap();
     let best = ex.chosen.first().expect("an effect is chosen");
     assert_eq!(
-        best.candidate.id, "declared:cubic",
+        best.candidate.id,
+        "declared:cubic",
         "{}",
-        best.candidate.name
+        modelgap::story::explanation_text(&ex, 8)
     );
     assert!(
         (best.params[0].value - 2.5).abs() < 0.1,

@@ -796,6 +796,55 @@ impl PyExplanation {
     fn warnings(&self) -> Vec<String> {
         self.inner.warnings.clone()
     }
+    /// The places discovery looked at, most explaining first, as dicts.
+    #[getter]
+    fn places<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let v: Vec<serde_json::Value> = self
+            .inner
+            .places
+            .iter()
+            .map(modelgap::json::place_json)
+            .collect();
+        let text = serde_json::to_string(&v).map_err(|e| data_error(e.to_string()))?;
+        py.import("json")?.call_method1("loads", (text,))
+    }
+
+    /// The missing effort (or flow) estimated at a place, as arrays ``(t, value, band)``.
+    #[allow(clippy::type_complexity)]
+    fn missing<'py>(
+        &self,
+        py: Python<'py>,
+        location: &str,
+    ) -> PyResult<(
+        Bound<'py, PyArray1<f64>>,
+        Bound<'py, PyArray1<f64>>,
+        Bound<'py, PyArray1<f64>>,
+    )> {
+        let m = (self.inner.missing.iter())
+            .find(|m| m.location == location)
+            .ok_or_else(|| {
+                let known: Vec<&str> = self
+                    .inner
+                    .missing
+                    .iter()
+                    .map(|m| m.location.as_str())
+                    .collect();
+                data_error(format!(
+                    "no missing effort was estimated at '{location}' (places: {})",
+                    if known.is_empty() {
+                        "none".to_string()
+                    } else {
+                        known.join(", ")
+                    }
+                ))
+            })?;
+        Ok((
+            PyArray1::from_slice(py, &m.t),
+            PyArray1::from_slice(py, &m.value),
+            PyArray1::from_slice(py, &m.band),
+        ))
+    }
+
     /// The ranking (the ``top`` best) and the verdict as text.
     #[pyo3(signature = (top = 5))]
     fn text(&self, top: usize) -> String {
@@ -815,10 +864,14 @@ impl PyExplanation {
         Ok((restore, (to_state(&slf.get().inner)?,)))
     }
 
+    /// Equal when everything a pickle keeps is equal (the missing-effort series are not kept).
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
-        other
-            .cast::<PyExplanation>()
-            .is_ok_and(|o| o.get().inner == self.inner)
+        other.cast::<PyExplanation>().is_ok_and(|o| {
+            matches!(
+                (to_state(&o.get().inner), to_state(&self.inner)),
+                (Ok(a), Ok(b)) if a == b
+            )
+        })
     }
     fn __repr__(&self) -> String {
         format!(

@@ -198,3 +198,19 @@ def test_bounds_and_reasons_reach_python(coulomb_explained: modelgap.Explanation
     tagged = [r for r in ex.ranked if r.qualitative is not None]
     assert tagged and all("fault trees" in r.qualitative_reason for r in tagged), ex.text()
     assert isinstance(ex.ranked[0].indistinct, list)
+
+
+def test_where_the_model_fails_reaches_python(coulomb_explained: modelgap.Explanation):
+    ex = coulomb_explained
+    places = ex.places
+    assert places and places[0]["location"] == "1m", places
+    assert 0.5 < places[0]["explained"] <= 1.0
+    law = places[0]["law"]
+    # Under this staircase drive the shaft's missing torque is nearly constant per step: the
+    # menu's Coulomb friction names it; a law, when the screen finds one, is a dict.
+    assert law is None or (law["terms"] and "formula" in law), law
+    t, value, band = ex.missing("1m")
+    assert t.shape == value.shape == band.shape and len(t) > 100
+    assert (band >= 0).all()
+    with pytest.raises(modelgap.DataError, match="no missing effort was estimated at 'x'"):
+        ex.missing("x")

@@ -46,6 +46,7 @@ pub mod effects;
 pub mod element;
 pub mod equations;
 pub mod error;
+pub mod estimate;
 pub mod exact;
 pub mod expr;
 pub mod file;

@@ -26,6 +26,7 @@
 use std::borrow::Cow;
 use std::fmt::Write as _;
 
+use modelgap_core::explain::estimate::MissingSignal;
 use modelgap_core::residual::Threshold;
 use modelgap_core::{Candidate, CoreError, Effect, Model, Prediction, QualitativeCheck, Recording};
 
@@ -121,7 +122,12 @@ impl BondModel {
         &self.changes
     }
 
-    /// Where predictions start.
+    /// How the recording's inputs are held between samples.
+    pub fn hold(&self) -> Hold {
+        self.hold
+    }
+
+    /// How runs start: at rest or at the steady state under the first inputs.
     pub fn start(&self) -> Start {
         self.start
     }
@@ -485,6 +491,21 @@ impl Model for BondModel {
 
     /// The parameters and initial states marked free in the graph (see
     /// [`effects::Calibration`]).
+    fn missing_signals(
+        &self,
+        rec: &Recording,
+        effects: &[(&Candidate, &[f64])],
+        outputs: &[String],
+        sigma: &[f64],
+    ) -> modelgap_core::Result<Vec<MissingSignal>> {
+        crate::estimate::missing_signals(self, rec, effects, outputs, sigma)
+            .map_err(|e| model_error(effects, e))
+    }
+
+    fn law_candidate(&self, law: &modelgap_core::explain::screen::Law) -> Option<Candidate> {
+        crate::effects::law_candidate(&self.graph, law)
+    }
+
     fn free_parameters(&self) -> Option<Candidate> {
         effects::Calibration::of(&self.graph)
     }

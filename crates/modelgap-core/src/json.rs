@@ -93,6 +93,7 @@ pub fn candidate_json(ex: &Explanation, r: &RankedCandidate) -> Value {
         "qualitative": r.qualitative,
         "qualitative_reason": (!r.qualitative_reason.is_empty()).then_some(&r.qualitative_reason),
         "equivalent": r.equivalent,
+        "screened": r.screened,
         "indistinct": r.indistinct,
         "termination": r.termination.to_string(),
         "error": r.error,
@@ -176,6 +177,46 @@ pub fn explanation_json(ex: &Explanation) -> Value {
         "margin": finite(ex.margin),
         "effective_samples": finite(ex.effective_samples),
         "warnings": ex.warnings,
+        "places": ex.places.iter().map(place_json).collect::<Vec<_>>(),
+    })
+}
+
+/// A place discovery looked at: the missing effort's size and band, and its law.
+pub fn place_json(p: &crate::explain::estimate::PlaceFinding) -> Value {
+    let law = p.law.as_ref().map(|l| {
+        let terms: Vec<Value> = (l.terms.iter())
+            .map(|t| {
+                json!({
+                    "param": t.param,
+                    "family": t.family,
+                    "term": t.expr_named(),
+                    "unit": t.unit,
+                    "coefficient": finite(t.coefficient),
+                    "std_error": finite(t.std_error),
+                    "shape": t.shape.as_ref().map(|s| json!({
+                        "name": s.name, "unit": s.unit, "value": finite(s.value),
+                    })),
+                })
+            })
+            .collect();
+        json!({
+            "formula": l.formula(),
+            "text": l.describe(),
+            "explained": finite(l.explained),
+            "residual_rms": finite(l.residual_rms),
+            "effective_samples": finite(l.effective_samples),
+            "terms": terms,
+        })
+    });
+    json!({
+        "location": p.location,
+        "place": p.place,
+        "quantity": p.quantity,
+        "unit": p.unit,
+        "explained": finite(p.explained),
+        "rms": finite(p.rms),
+        "band": finite(p.band),
+        "law": law,
     })
 }
 

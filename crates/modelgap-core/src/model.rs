@@ -4,6 +4,8 @@
 
 use crate::effect::{Candidate, Effect};
 use crate::error::Result;
+use crate::explain::estimate::MissingSignal;
+use crate::explain::screen::Law;
 use crate::recording::Recording;
 
 /// A model's prediction of a recording's measured outputs, at the recording's times.
@@ -131,6 +133,36 @@ pub trait Model: Send + Sync {
     /// # Errors
     /// [`crate::CoreError::Model`] when an effect does not fit the model.
     fn with_effects(&self, effects: &[Effect]) -> Result<Box<dyn Model>>;
+
+    /// The missing effort (or flow) at each place of the model where one
+    /// could act, estimated from `rec` with `effects` applied (the model's
+    /// calibration): discovery's first stage
+    /// ([`crate::explain::estimate`]). `outputs` are the outputs to hold
+    /// the model against and `sigma` their noise (one per output, in their
+    /// units). Empty (the default) when the model cannot estimate it.
+    ///
+    /// # Errors
+    /// [`crate::CoreError::Model`] when the model cannot be simulated.
+    fn missing_signals(
+        &self,
+        rec: &Recording,
+        effects: &[(&Candidate, &[f64])],
+        outputs: &[String],
+        sigma: &[f64],
+    ) -> Result<Vec<MissingSignal>> {
+        let _ = (rec, effects, outputs, sigma);
+        Ok(Vec::new())
+    }
+
+    /// A law the screen found ([`crate::explain::screen`]) as a candidate
+    /// effect this model can build in, started at the regression's values
+    /// and bounded by the data's scale: discovery's third stage confirms it
+    /// by simulation like any candidate. `None` (the default) when the model
+    /// cannot build laws.
+    fn law_candidate(&self, law: &Law) -> Option<Candidate> {
+        let _ = law;
+        None
+    }
 
     /// The model's own predictability band on `rec`: per output and per
     /// sample, how far (in the output's unit, ≥ 0) a prediction of the same

@@ -299,6 +299,12 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
         if let Some(e) = &r.error {
             let _ = writeln!(s, "      fit failed: {e}");
         }
+        if r.screened {
+            let _ = writeln!(
+                s,
+                "      screened only: sized by one linearised step, not confirmed by a fit"
+            );
+        }
         if i == 0 && !r.indistinct.is_empty() {
             let _ = writeln!(
                 s,
@@ -318,6 +324,40 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
     }
     if !ex.ranked.is_empty() {
         let _ = writeln!(s, "margin to the runner-up: {}", num(ex.margin));
+    }
+    let places: Vec<_> = (ex.places.iter()).filter(|p| p.explained >= 0.05).collect();
+    if !places.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nwhere the model fails (the missing effort or flow estimated at each place, and \
+             the share of the outputs' error it removes):"
+        );
+        for p in places {
+            let unit = unit_suffix(&p.unit);
+            let _ = writeln!(
+                s,
+                "  {}: missing {} RMS {}{unit} ± {}{unit}, removes {:.0} % of the error",
+                p.place,
+                p.quantity.word(),
+                num(p.rms),
+                num(p.band),
+                100.0 * p.explained
+            );
+            match &p.law {
+                Some(l) => {
+                    let _ = writeln!(
+                        s,
+                        "      its law (regression on a typed library, {:.0} % of it): {} = {}",
+                        100.0 * l.explained,
+                        p.quantity.word(),
+                        l.describe()
+                    );
+                }
+                None => {
+                    let _ = writeln!(s, "      no law of the library explains it");
+                }
+            }
+        }
     }
     let _ = writeln!(s, "\nverdict: {}", verdict_sentence(ex));
     let judged = !matches!(ex.verdict, Verdict::CannotJudge | Verdict::Interrupted);
@@ -557,8 +597,41 @@ pub fn build_report(
         residuals: Vec::new(),
         ranking,
         ranking_unit: "BIC evidence, with a penalty per fitted parameter".to_string(),
-        extra_svgs: Vec::new(),
+        extra_svgs: explanation.map_or_else(Vec::new, missing_plots),
     }
+}
+
+/// The missing effort at the places where the model fails (those removing at least 5 % of
+/// the error, at most three), each with the law the screen found: as plots for the report.
+fn missing_plots(ex: &Explanation) -> Vec<(String, String)> {
+    (ex.missing.iter())
+        .filter_map(|m| {
+            let place = ex.places.iter().find(|p| p.location == m.location)?;
+            (place.explained >= 0.05).then_some((m, place))
+        })
+        .take(3)
+        .map(|(m, place)| {
+            let law = place.law.as_ref();
+            let caption = format!(
+                "Where the model fails: the missing {} at {} estimated from the recording \
+                 (a Kalman smoother with an unknown {} there), which removes {:.0} % of the \
+                 outputs' error; {}",
+                m.quantity.word(),
+                m.place,
+                m.quantity.word(),
+                100.0 * place.explained,
+                law.map_or(
+                    "no law of the library explains it.".to_string(),
+                    |l| format!(
+                        "the law found by regression ({:.0} % of it): {}.",
+                        100.0 * l.explained,
+                        l.describe()
+                    )
+                )
+            );
+            (caption, crate::report::missing_svg(m, law))
+        })
+        .collect()
 }
 
 /// Writes `report.html` and `comparison.mcap` (measured, model before and

@@ -635,6 +635,32 @@ class Explanation:
         recording from being judged, which output's residual is not noise and how, or how
         far an interrupted run got."""
 
+    @property
+    def places(self) -> list[dict[str, Any]]:
+        """Where the model fails: each place discovery looked at (a junction of a bond
+        graph), most explaining first, as a dict with ``location``, ``place``, ``quantity``
+        (``'effort'`` or ``'flow'``), ``unit``, ``explained`` (the share of the outputs' error
+        an effort there removes, 0–1), ``rms`` and ``band`` of the missing effort, and
+        ``law`` (``None``, or the law the screen found: ``formula``, ``text``,
+        ``explained``, ``terms``)."""
+
+    def missing(
+        self, location: str
+    ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+        """The missing effort (or flow) estimated at a place, to plot or export.
+
+        Args:
+            location: The place's element name (``'1m'``), as in :attr:`places`.
+
+        Returns:
+            ``(t, value, band)``: times (s), the estimate and its one-sigma band (the
+            place's unit).
+
+        Raises:
+            DataError: No estimate at that place (it names the places there are). An
+                explanation restored from a pickle keeps no series.
+        """
+
     def text(self, top: int = 5) -> str:
         """The ranking and the verdict as text (what the command line prints).
 

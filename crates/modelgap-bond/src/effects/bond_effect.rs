@@ -9,8 +9,8 @@ use super::scales::Scales;
 use super::tag::Tag;
 use super::{
     ActuatorGain, Brush, Calibration, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation,
-    Factor, Fault, Faulted, Inertia, Inflow, Junction, Leak, Load, Node, Orifice, Overflow,
-    Saturation, SensorLag, Stiffness, Store, Viscous,
+    Factor, Fault, Faulted, Inertia, Inflow, Junction, LawEffect, Leak, Load, Node, Orifice,
+    Overflow, Saturation, SensorLag, Stiffness, Store, Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::BondGraph;
@@ -61,6 +61,8 @@ pub enum BondEffect {
     Lag(SensorLag),
     /// `declared:<name>`: an effect the model file declares.
     Declared(Declared),
+    /// `law@<place>:<formula>`: a law discovery found (never on the menu).
+    Law(LawEffect),
     /// `calibration`: the graph's free parameters and initial states (never
     /// on the menu; see [`Calibration`]).
     Calibration(Calibration),
@@ -252,6 +254,17 @@ impl BondEffect {
             Tag::Coupling => Coupling::at(junction()?).map(Into::into),
             Tag::Cogging => Cogging::at(junction()?).map(Into::into),
             Tag::Brush => Brush::at(junction()?).map(Into::into),
+            Tag::Law => Some(BondEffect::Law(LawEffect::read(g, target).ok_or_else(
+                || {
+                    bad(
+                        c,
+                        "",
+                        format!(
+                            "'{target}' is not a junction of the model followed by ':' and a law"
+                        ),
+                    )
+                },
+            )?)),
             Tag::Calibration => target
                 .is_empty()
                 .then_some(BondEffect::Calibration(Calibration)),
@@ -283,6 +296,7 @@ impl BondEffect {
             BondEffect::Gain(k) => k,
             BondEffect::Lag(k) => k,
             BondEffect::Declared(k) => k,
+            BondEffect::Law(k) => k,
             BondEffect::Calibration(k) => k,
         }
     }
@@ -312,6 +326,7 @@ impl BondEffect {
             | BondEffect::Gain(_)
             | BondEffect::Lag(_)
             | BondEffect::Declared(_)
+            | BondEffect::Law(_)
             | BondEffect::Calibration(_) => None,
         }
     }
@@ -367,6 +382,7 @@ impl BondEffect {
             Tag::DeadZone => DeadZone::vanishing_values(c),
             Tag::Gain => ActuatorGain::vanishing_values(c),
             Tag::Lag => SensorLag::vanishing_values(c),
+            Tag::Law => LawEffect::vanishing_values(c),
         }
     }
 }

@@ -39,7 +39,7 @@ impl Domain {
         matches!(self, Domain::Rotational | Domain::Translational)
     }
 
-    pub(super) fn effort_unit(self) -> &'static str {
+    pub(crate) fn effort_unit(self) -> &'static str {
         match self {
             Domain::Electrical => "V",
             Domain::Rotational => "N m",
@@ -47,7 +47,7 @@ impl Domain {
         }
     }
 
-    pub(super) fn flow_unit(self) -> &'static str {
+    pub(crate) fn flow_unit(self) -> &'static str {
         match self {
             Domain::Electrical => "A",
             Domain::Rotational => "rad/s",

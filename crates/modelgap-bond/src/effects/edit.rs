@@ -79,7 +79,7 @@ pub(super) fn new_param(
 
 /// Adds a one-port (or a junction) on junction `j`, its bond pointing into it,
 /// under a fresh name derived from its own.
-pub(super) fn attach(g: &mut BondGraph, j: ElementId, mut element: Element) -> Result<ElementId> {
+pub(crate) fn attach(g: &mut BondGraph, j: ElementId, mut element: Element) -> Result<ElementId> {
     element.name = fresh_element(g, &element.name);
     let id = g.add(element)?;
     g.bond(j, id)?;

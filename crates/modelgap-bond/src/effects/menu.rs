@@ -149,7 +149,7 @@ pub(super) fn head(description: &str) -> &str {
 }
 
 /// "the shaft (1m)" from a junction's description, or "junction 1m".
-pub(super) fn place(g: &BondGraph, j: ElementId) -> String {
+pub(crate) fn place(g: &BondGraph, j: ElementId) -> String {
     let el = g.element(j);
     let h = head(&el.description);
     if h.is_empty() {

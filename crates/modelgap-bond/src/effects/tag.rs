@@ -27,11 +27,12 @@ pub(super) enum Tag {
     Gain,
     Lag,
     Declared,
+    Law,
     Calibration,
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 21] = [
+const PREFIXES: [(Tag, &str); 22] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -52,6 +53,7 @@ const PREFIXES: [(Tag, &str); 21] = [
     (Tag::Gain, "gain@"),
     (Tag::Lag, "lag@"),
     (Tag::Declared, "declared:"),
+    (Tag::Law, "law@"),
     (Tag::Calibration, "calibration"),
 ];
 
@@ -111,7 +113,7 @@ mod tests {
     fn the_expected_prefixes_read_as_a_list() {
         assert_eq!(
             Tag::expected(),
-            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@, gain@, lag@ or declared:"
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@, gain@, lag@, declared: or law@"
         );
     }
 }

