@@ -325,3 +325,27 @@ fn silverbox_missing_effort_follows_the_cubic_spring() {
         law.describe()
     );
 }
+
+#[test]
+fn a_speed_sensor_that_reads_high_is_named_an_offset_of_its_sensor() {
+    let rec = motor_with(None, 0.002, 7);
+    let mut signals: Vec<modelgap::Signal> = Vec::new();
+    for name in ["V", "i", "omega"] {
+        let v = &rec.signal(name).unwrap().values;
+        let shift = if name == "omega" { 2.0 } else { 0.0 };
+        signals.push(modelgap::Signal {
+            name: name.into(),
+            values: v.iter().map(|x| x + shift).collect(),
+        });
+    }
+    let rec = Recording::new(rec.t().to_vec(), signals).unwrap();
+    let ex = explained(&rec);
+    let first = ex
+        .chosen
+        .first()
+        .unwrap_or_else(|| panic!("{}", story(&ex)));
+    assert_eq!(first.candidate.id, "offset@omega", "{}", story(&ex));
+    let b = first.params[0].value;
+    assert!((b / 2.0 - 1.0).abs() < 0.05, "offset {b}\n{}", story(&ex));
+    at_floor(&ex, 1.3);
+}

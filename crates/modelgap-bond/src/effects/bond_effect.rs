@@ -10,7 +10,7 @@ use super::tag::Tag;
 use super::{
     ActuatorGain, Brush, Calibration, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation,
     Factor, Fault, Faulted, Inertia, Inflow, Junction, LawEffect, Leak, Load, Node, Orifice,
-    Overflow, Saturation, SensorLag, Stiffness, Store, Viscous,
+    Overflow, Saturation, SensorLag, SensorOffset, Stiffness, Store, Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::BondGraph;
@@ -59,6 +59,8 @@ pub enum BondEffect {
     Gain(ActuatorGain),
     /// `lag@<output>`: a first-order lag in an output's sensor.
     Lag(SensorLag),
+    /// `offset@<output>`: a constant offset in an output's sensor.
+    Offset(SensorOffset),
     /// `declared:<name>`: an effect the model file declares.
     Declared(Declared),
     /// `law@<place>:<formula>`: a law discovery found (never on the menu).
@@ -103,6 +105,12 @@ from_kind!(
 impl From<ActuatorGain> for BondEffect {
     fn from(k: ActuatorGain) -> BondEffect {
         BondEffect::Gain(k)
+    }
+}
+
+impl From<SensorOffset> for BondEffect {
+    fn from(k: SensorOffset) -> BondEffect {
+        BondEffect::Offset(k)
     }
 }
 
@@ -242,6 +250,16 @@ impl BondEffect {
                 })?;
                 Some(BondEffect::Lag(l))
             }
+            Tag::Offset => {
+                let o = SensorOffset::named(g, target).ok_or_else(|| {
+                    bad(
+                        c,
+                        "",
+                        format!("the model has no output '{target}' an offset can shift"),
+                    )
+                })?;
+                Some(BondEffect::Offset(o))
+            }
             Tag::Declared => Some(BondEffect::Declared(
                 Declared::named(g, target).ok_or_else(|| {
                     bad(c, "", format!("the model declares no candidate '{target}'"))
@@ -295,6 +313,7 @@ impl BondEffect {
             BondEffect::DeadZone(k) => k,
             BondEffect::Gain(k) => k,
             BondEffect::Lag(k) => k,
+            BondEffect::Offset(k) => k,
             BondEffect::Declared(k) => k,
             BondEffect::Law(k) => k,
             BondEffect::Calibration(k) => k,
@@ -325,6 +344,7 @@ impl BondEffect {
             | BondEffect::DeadZone(_)
             | BondEffect::Gain(_)
             | BondEffect::Lag(_)
+            | BondEffect::Offset(_)
             | BondEffect::Declared(_)
             | BondEffect::Law(_)
             | BondEffect::Calibration(_) => None,
@@ -382,6 +402,7 @@ impl BondEffect {
             Tag::DeadZone => DeadZone::vanishing_values(c),
             Tag::Gain => ActuatorGain::vanishing_values(c),
             Tag::Lag => SensorLag::vanishing_values(c),
+            Tag::Offset => SensorOffset::vanishing_values(c),
             Tag::Law => LawEffect::vanishing_values(c),
         }
     }

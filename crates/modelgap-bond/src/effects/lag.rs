@@ -37,7 +37,7 @@ impl SensorLag {
 
 /// The output's variable as a signal expression (`spring.q`, `tank.e`), or
 /// its own expression.
-fn signal_of(g: &BondGraph, output: usize) -> Option<Expr> {
+pub(super) fn signal_of(g: &BondGraph, output: usize) -> Option<Expr> {
     let o = g.outputs().get(output)?;
     match &o.measured {
         Measured::Effort(x) => Some(Expr::signal(x, "e")),

@@ -8,8 +8,8 @@ use super::def::EffectDef;
 use super::scales::Scales;
 use super::{
     ActuatorGain, Brush, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault,
-    Inertia, Inflow, Leak, Load, Orifice, Overflow, Saturation, SensorLag, Stiffness, Store,
-    Viscous,
+    Inertia, Inflow, Leak, Load, Orifice, Overflow, Saturation, SensorLag, SensorOffset, Stiffness,
+    Store, Viscous,
 };
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
@@ -134,6 +134,7 @@ pub fn offered(g: &BondGraph) -> Vec<BondEffect> {
     out.extend(of::<DeadZone>(g));
     out.extend(of::<ActuatorGain>(g));
     out.extend(of::<SensorLag>(g));
+    out.extend(of::<SensorOffset>(g));
     out.extend(of::<Declared>(g));
     out
 }

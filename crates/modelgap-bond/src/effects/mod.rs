@@ -60,7 +60,8 @@
 //!   compliance), and on hydraulic ones [`orifice`](Orifice) (√Δp outflow);
 //! - on a source an input drives, in any domain: [`deadzone`](DeadZone) and
 //!   [`gain`](ActuatorGain) (the actuator delivers `k` times its command);
-//! - on every output: [`lag`](SensorLag) (a first-order lag in its sensor);
+//! - on every output: [`lag`](SensorLag) (a first-order lag in its sensor) and
+//!   [`offset`](SensorOffset) (a constant added to its reading);
 //! - declared by the model file (`[[candidates]]`): [`declared`](Declared);
 //! - never on the menu: [`calibration`](Calibration), the graph's own unknowns
 //!   (free parameters and initial states) that calibration fits.
@@ -97,6 +98,7 @@ mod leak;
 mod load;
 mod menu;
 mod node;
+mod offset;
 mod orifice;
 mod overflow;
 mod saturation;
@@ -138,6 +140,7 @@ pub use load::Load;
 pub(crate) use menu::place;
 pub use menu::{candidates, candidates_with, offered};
 pub use node::{Node, NodeKind};
+pub use offset::SensorOffset;
 pub use orifice::Orifice;
 pub use overflow::Overflow;
 pub use saturation::Saturation;

@@ -86,6 +86,8 @@ pub struct Scales {
     /// lag is searched between.
     pub(super) sample_time: Option<f64>,
     pub(super) duration: Option<f64>,
+    /// Each output's largest magnitude over the run, by name.
+    outputs: BTreeMap<String, f64>,
 }
 
 impl Scales {
@@ -124,8 +126,25 @@ impl Scales {
         }
         if let Some(run) = &run {
             s.measure(g, &model, run, false);
+            s.measure_outputs(run);
         }
         s
+    }
+
+    /// Records each output's largest magnitude over `run`.
+    fn measure_outputs(&mut self, run: &Run) {
+        for (name, values) in run.output_names.iter().zip(&run.outputs) {
+            let peak = values
+                .iter()
+                .filter(|v| v.is_finite())
+                .fold(0.0_f64, |a, v| a.max(v.abs()));
+            self.outputs.insert(name.clone(), peak);
+        }
+    }
+
+    /// The largest magnitude output `name` took over the run, if it was measured.
+    pub(super) fn output_peak(&self, name: &str) -> Option<f64> {
+        self.outputs.get(name).copied()
     }
 
     /// The scales of `g` over `run`, a simulation driven by a recording's
@@ -146,6 +165,7 @@ impl Scales {
             .map(|m| m.eigenvalue.norm())
             .filter(|r| *r > 0.0);
         s.measure(g, &model, run, true);
+        s.measure_outputs(run);
         s
     }
 

@@ -26,13 +26,14 @@ pub(super) enum Tag {
     DeadZone,
     Gain,
     Lag,
+    Offset,
     Declared,
     Law,
     Calibration,
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 22] = [
+const PREFIXES: [(Tag, &str); 23] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -52,6 +53,7 @@ const PREFIXES: [(Tag, &str); 22] = [
     (Tag::DeadZone, "deadzone@"),
     (Tag::Gain, "gain@"),
     (Tag::Lag, "lag@"),
+    (Tag::Offset, "offset@"),
     (Tag::Declared, "declared:"),
     (Tag::Law, "law@"),
     (Tag::Calibration, "calibration"),
@@ -113,7 +115,7 @@ mod tests {
     fn the_expected_prefixes_read_as_a_list() {
         assert_eq!(
             Tag::expected(),
-            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@, gain@, lag@, declared: or law@"
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@, gain@, lag@, offset@, declared: or law@"
         );
     }
 }
