@@ -391,20 +391,19 @@ fn estimate_at(
                 values: pos,
             });
         }
-        signals.insert(
-            signals.len().min(if role == SignalRole::Flow {
-                0
-            } else {
-                signals.len()
-            }),
-            ActingSignal {
-                name: law,
-                label,
-                unit,
-                role,
-                values,
-            },
-        );
+        let signal = ActingSignal {
+            name: law,
+            label,
+            unit,
+            role,
+            values,
+        };
+        // The place's own flow first.
+        if role == SignalRole::Flow {
+            signals.insert(0, signal);
+        } else {
+            signals.push(signal);
+        }
     }
     for name in &input_names {
         if let Some(s) = rec.signal(name) {

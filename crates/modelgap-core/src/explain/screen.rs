@@ -340,7 +340,6 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
             continue;
         }
         // Names are made unique within a law when it is built.
-        let sfx = "";
         let (n, u, eu) = (&a.name, &a.unit, &m.unit);
         let linear = |name: &str| {
             single(
@@ -348,7 +347,7 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
                 n,
                 1,
                 term(
-                    &format!("c_{name}{sfx}"),
+                    &format!("c_{name}"),
                     Family::Linear,
                     a.label.clone(),
                     n.clone(),
@@ -367,6 +366,37 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
         } else {
             format!("({u})^3")
         };
+        // `v·|v|` (drag on a flow, a one-sided spring on a displacement) and `v³`.
+        let quadratic = |name: &str| {
+            single(
+                Family::QuadraticDrag,
+                n,
+                1,
+                term(
+                    &format!("c_{name}"),
+                    Family::QuadraticDrag,
+                    format!("{0} · |{0}|", a.label),
+                    format!("{n} * abs({n})"),
+                    per(eu, &sq),
+                ),
+                v.iter().map(|x| x * x.abs()).collect(),
+            )
+        };
+        let cubic = || {
+            single(
+                Family::Cubic,
+                n,
+                1,
+                term(
+                    "c_cubic",
+                    Family::Cubic,
+                    format!("{}³", a.label),
+                    format!("{n}^3"),
+                    per(eu, &cube),
+                ),
+                v.iter().map(|x| x * x * x).collect(),
+            )
+        };
         match a.role {
             SignalRole::Flow => {
                 out.push(linear("lin"));
@@ -382,7 +412,7 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
                         eps.len(),
                         shaped(
                             term(
-                                &format!("c_sign{sfx}"),
+                                "c_sign",
                                 Family::Sign,
                                 format!("tanh({} / §)", a.label),
                                 format!("tanh({n} / §)"),
@@ -410,7 +440,7 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
                         vs_grid.len(),
                         shaped(
                             term(
-                                &format!("c_stribeck{sfx}"),
+                                "c_stribeck",
                                 Family::Stribeck,
                                 format!("tanh({0} / {sharp:.3e} {u}) · exp(−({0} / §)²)", a.label),
                                 format!("tanh({n} / {}) * exp(-({n} / §)^2)", num(sharp)),
@@ -427,61 +457,13 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
                             .collect(),
                     ));
                 }
-                out.push(single(
-                    Family::QuadraticDrag,
-                    n,
-                    1,
-                    term(
-                        &format!("c_drag{sfx}"),
-                        Family::QuadraticDrag,
-                        format!("{0} · |{0}|", a.label),
-                        format!("{n} * abs({n})"),
-                        per(eu, &sq),
-                    ),
-                    v.iter().map(|x| x * x.abs()).collect(),
-                ));
-                out.push(single(
-                    Family::Cubic,
-                    n,
-                    1,
-                    term(
-                        &format!("c_cubic{sfx}"),
-                        Family::Cubic,
-                        format!("{}³", a.label),
-                        format!("{n}^3"),
-                        per(eu, &cube),
-                    ),
-                    v.iter().map(|x| x * x * x).collect(),
-                ));
+                out.push(quadratic("drag"));
+                out.push(cubic());
             }
             SignalRole::Displacement => {
                 out.push(linear("lin"));
-                out.push(single(
-                    Family::Cubic,
-                    n,
-                    1,
-                    term(
-                        &format!("c_cubic{sfx}"),
-                        Family::Cubic,
-                        format!("{}³", a.label),
-                        format!("{n}^3"),
-                        per(eu, &cube),
-                    ),
-                    v.iter().map(|x| x * x * x).collect(),
-                ));
-                out.push(single(
-                    Family::QuadraticDrag,
-                    n,
-                    1,
-                    term(
-                        &format!("c_quad{sfx}"),
-                        Family::QuadraticDrag,
-                        format!("{0} · |{0}|", a.label),
-                        format!("{n} * abs({n})"),
-                        per(eu, &sq),
-                    ),
-                    v.iter().map(|x| x * x.abs()).collect(),
-                ));
+                out.push(cubic());
+                out.push(quadratic("quad"));
             }
             SignalRole::Angle => {
                 for order in 1..=MAX_HARMONIC {
@@ -492,14 +474,14 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
                         scanned: MAX_HARMONIC,
                         terms: vec![
                             term(
-                                &format!("c_sin{order}{sfx}"),
+                                &format!("c_sin{order}"),
                                 Family::Harmonic,
                                 format!("sin({order} · {})", a.label),
                                 format!("sin({order} * {n})"),
                                 eu.clone(),
                             ),
                             term(
-                                &format!("c_cos{order}{sfx}"),
+                                &format!("c_cos{order}"),
                                 Family::Harmonic,
                                 format!("cos({order} · {})", a.label),
                                 format!("cos({order} * {n})"),
@@ -520,7 +502,7 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
                     n,
                     1,
                     term(
-                        &format!("c_sqrt{sfx}"),
+                        "c_sqrt",
                         Family::SquareRoot,
                         format!("√{}", a.label),
                         format!("sqrt(max({n}, 0))"),
