@@ -109,6 +109,17 @@ fn chain_effects_on_places_the_model_lacks_are_refused() {
             "deadzone@1m",
             "no source '1m' driven by an input",
         ),
+        ("offset@omega", "offset@speed", "no output 'speed'"),
+        (
+            "offset@omega",
+            "law@shaft:c * 1",
+            "'shaft:c * 1' is not a junction of the model",
+        ),
+        (
+            "offset@omega",
+            "law@1m:c * (",
+            "cannot build the law 'c * ('",
+        ),
     ] {
         let mut c = menu
             .iter()
