@@ -9,8 +9,8 @@ use super::scales::Scales;
 use super::tag::Tag;
 use super::{
     ActuatorGain, Brush, Calibration, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation,
-    Factor, Fault, Faulted, Inertia, Inflow, Junction, LawEffect, Leak, Load, Node, Orifice,
-    Overflow, Saturation, SensorLag, SensorOffset, Stiffness, Store, Viscous,
+    Factor, Fault, Faulted, Heating, Inertia, Inflow, Junction, LawEffect, Leak, Load, Node,
+    Orifice, Overflow, Saturation, SensorLag, SensorOffset, Stiffness, Store, Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::BondGraph;
@@ -41,6 +41,8 @@ pub enum BondEffect {
     Brush(Brush),
     /// `saturation@<I>`: magnetic saturation.
     Saturation(Saturation),
+    /// `heating@<R>`: a resistance that rises with the energy it dissipates.
+    Heating(Heating),
     /// `stiffness@<C>`: a cubic term in a C's law.
     Stiffness(Stiffness),
     /// `leak@<node>`: a linear loss from a storage node.
@@ -91,6 +93,7 @@ from_kind!(
     Cogging,
     Brush,
     Saturation,
+    Heating,
     Stiffness,
     Leak,
     Inflow,
@@ -193,6 +196,19 @@ impl BondEffect {
                 let s =
                     s.ok_or_else(|| bad(c, "", format!("the model has no I element '{target}'")))?;
                 Some(BondEffect::Saturation(s))
+            }
+            Tag::Heating => {
+                let h = g.find(target).and_then(|id| Heating::at(g, id));
+                let h = h.ok_or_else(|| {
+                    bad(
+                        c,
+                        "",
+                        format!(
+                            "'{target}' is not an R of the model with a linear resistance on an electrical 1-junction"
+                        ),
+                    )
+                })?;
+                Some(BondEffect::Heating(h))
             }
             Tag::Stiffness => {
                 let s = g.find(target).and_then(|id| Stiffness::at(g, id));
@@ -304,6 +320,7 @@ impl BondEffect {
             BondEffect::Cogging(k) => k,
             BondEffect::Brush(k) => k,
             BondEffect::Saturation(k) => k,
+            BondEffect::Heating(k) => k,
             BondEffect::Stiffness(k) => k,
             BondEffect::Leak(k) => k,
             BondEffect::Inflow(k) => k,
@@ -335,6 +352,7 @@ impl BondEffect {
             | BondEffect::Factor(_)
             | BondEffect::Fault(_)
             | BondEffect::Saturation(_)
+            | BondEffect::Heating(_)
             | BondEffect::Stiffness(_)
             | BondEffect::Leak(_)
             | BondEffect::Inflow(_)
@@ -393,6 +411,7 @@ impl BondEffect {
             Tag::Cogging => Cogging::vanishing_values(c),
             Tag::Brush => Brush::vanishing_values(c),
             Tag::Saturation => Saturation::vanishing_values(c),
+            Tag::Heating => Heating::vanishing_values(c),
             Tag::Stiffness => Stiffness::vanishing_values(c),
             Tag::Leak => Leak::vanishing_values(c),
             Tag::Inflow => Inflow::vanishing_values(c),

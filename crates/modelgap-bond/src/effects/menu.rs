@@ -8,8 +8,8 @@ use super::def::EffectDef;
 use super::scales::Scales;
 use super::{
     ActuatorGain, Brush, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault,
-    Inertia, Inflow, Leak, Load, Orifice, Overflow, Saturation, SensorLag, SensorOffset, Stiffness,
-    Store, Viscous,
+    Heating, Inertia, Inflow, Leak, Load, Orifice, Overflow, Saturation, SensorLag, SensorOffset,
+    Stiffness, Store, Viscous,
 };
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
@@ -61,6 +61,10 @@ use crate::graph::{BondGraph, ElementId};
 /// - For each electrical I with a linear law: `saturation@<I>`
 ///   (`f = p / L · (1 + a_sat p²)`, `a_sat` ≥ 0 in 1/Wb², scale `0.1 / p_peak²`
 ///   with `p_peak` the peak flux of a start-up).
+/// - For each electrical R with a linear law on an electrical 1-junction:
+///   `heating@<R>` (`e = R (1 + a_heat E) f`, `E` the energy it has
+///   dissipated since the start, a new state; `a_heat` from 0 to `4 / E_run`,
+///   `E_run = R I² T` with the junction's typical current over the run).
 ///
 /// Bounds of the element strengths: a friction level, a brush drop and a
 /// cogging amplitude reach the junction's peak effort (`tau_0` and `A_cog`
@@ -112,6 +116,7 @@ pub fn offered(g: &BondGraph) -> Vec<BondEffect> {
     on_junctions.sort_by_key(|e| e.junction().map(|j| j.id));
     out.extend(on_junctions);
     out.extend(of::<Saturation>(g));
+    out.extend(of::<Heating>(g));
     out.extend(of::<Stiffness>(g));
     // Storage nodes, node by node.
     let mut on_nodes: Vec<(ElementId, BondEffect)> = (Leak::offers(g).into_iter())

@@ -52,7 +52,8 @@
 //!   a modulus input), [`fault`](Fault) (`fault:<p>`, `fault:<u>`);
 //! - on junctions: [`viscous`](Viscous), [`coulomb`](Coulomb), [`load`](Load),
 //!   [`inertia`](Inertia), [`coupling`](Coupling), [`cogging`](Cogging),
-//!   [`brush`](Brush); on an I: [`saturation`](Saturation); on a C, in any
+//!   [`brush`](Brush); on an I: [`saturation`](Saturation); on an electrical R:
+//!   [`heating`](Heating) (it rises with the energy it dissipates); on a C, in any
 //!   domain: [`stiffness`](Stiffness) (a cubic term); on storage nodes
 //!   ([`Node`]: a 0-junction with a C, any domain): [`leak`](Leak),
 //!   [`inflow`](Inflow), [`overflow`](Overflow), [`store`](Store) (a second
@@ -89,6 +90,7 @@ mod edit;
 mod factor;
 mod fault;
 mod gain;
+mod heating;
 mod inertia;
 mod inflow;
 mod junction;
@@ -130,6 +132,7 @@ pub(crate) use edit::attach;
 pub use factor::Factor;
 pub use fault::{Fault, Faulted};
 pub use gain::ActuatorGain;
+pub use heating::Heating;
 pub use inertia::Inertia;
 pub use inflow::Inflow;
 pub use junction::{Junction, junction_domain};

@@ -17,6 +17,7 @@ pub(super) enum Tag {
     Cogging,
     Brush,
     Saturation,
+    Heating,
     Stiffness,
     Leak,
     Inflow,
@@ -33,7 +34,7 @@ pub(super) enum Tag {
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 23] = [
+const PREFIXES: [(Tag, &str); 24] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -44,6 +45,7 @@ const PREFIXES: [(Tag, &str); 23] = [
     (Tag::Cogging, "cogging@"),
     (Tag::Brush, "brush@"),
     (Tag::Saturation, "saturation@"),
+    (Tag::Heating, "heating@"),
     (Tag::Stiffness, "stiffness@"),
     (Tag::Leak, "leak@"),
     (Tag::Inflow, "inflow@"),
@@ -115,7 +117,7 @@ mod tests {
     fn the_expected_prefixes_read_as_a_list() {
         assert_eq!(
             Tag::expected(),
-            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@, gain@, lag@, offset@, declared: or law@"
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@, gain@, lag@, offset@, declared: or law@"
         );
     }
 }

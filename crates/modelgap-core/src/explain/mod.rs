@@ -1633,8 +1633,12 @@ fn second_effect(
 ) -> Option<(Vec<RankedCandidate>, Vec<f64>)> {
     let n = target.n_residuals();
     let first = best.effect();
+    // The laws of what the first leaves: the missing effort estimated again with the first
+    // built in (a Stribeck dip that Coulomb friction leaves at each reversal).
+    let rediscovered = laws_on_top(target, best);
     let others: Vec<&Candidate> = candidates
         .iter()
+        .chain(&rediscovered)
         .filter(|c| c.id != first.candidate.id && !best.equivalent.contains(&c.id))
         .collect();
     let first_c = prepared(&first.candidate, target.rec);
@@ -1737,6 +1741,36 @@ fn second_effect(
         vec![first_ranked, second_ranked],
         joint_first.weighted.clone(),
     ))
+}
+
+/// The candidates of the laws found where the model with `best` built in (and the
+/// calibration as fitted with it) still misses an effort or flow: discovery's estimate
+/// and screen once more, on what the first effect leaves. Empty when the estimate fails.
+fn laws_on_top(target: &Target, best: &RankedCandidate) -> Vec<Candidate> {
+    let calibration = (best.calibration.clone())
+        .map(|e| (e.candidate, e.values))
+        .or_else(|| (target.calibration.clone()).map(|c| (c.clone(), c.initial())));
+    let first = best.effect();
+    let effects: Vec<(Candidate, Vec<f64>)> = calibration
+        .into_iter()
+        .chain(std::iter::once((first.candidate, first.values)))
+        .collect();
+    let effects: Vec<(&Candidate, &[f64])> =
+        effects.iter().map(|(c, v)| (c, v.as_slice())).collect();
+    let Ok(mut missing) =
+        (target.model).missing_signals(target.rec, &effects, &target.names, &target.sigma)
+    else {
+        return Vec::new();
+    };
+    missing.sort_by(|a, b| b.explained.total_cmp(&a.explained));
+    let linear = target.calibration.is_none();
+    let most = missing.first().map_or(0.0, |m| m.explained);
+    missing
+        .par_iter()
+        .filter(|m| m.explained >= 0.5 * most && m.explained > 0.05)
+        .filter_map(|m| screen::screen_with(m, linear))
+        .filter_map(|l| target.model.law_candidate(&l))
+        .collect()
 }
 
 /// Whether `after` leaves less than `before` on each half of the recording
