@@ -73,9 +73,7 @@ fn places(g: &BondGraph) -> Vec<Place> {
                 };
                 let integral = match domain {
                     Some(Domain::Rotational) => Some((SignalRole::Angle, "rad".to_string())),
-                    Some(Domain::Translational) => {
-                        Some((SignalRole::Displacement, "m".to_string()))
-                    }
+                    Some(Domain::Translational) => Some((SignalRole::Position, "m".to_string())),
                     Some(Domain::Electrical) => None,
                     None => {
                         // A place of no known domain: its position, unless a spring gives it.

@@ -45,8 +45,12 @@ pub enum SignalRole {
     /// The integral of a rotational flow from the start: an angle (rad),
     /// whose harmonics a ripple follows.
     Angle,
-    /// A displacement: a translational position from the start, or the
-    /// state of a spring or capacitor bonded at the place.
+    /// A translational position from the start (the place's velocity
+    /// integrated): a ripple locked to it (a linear motor's magnets, a
+    /// screw's or a rack's pitch) repeats every wavelength.
+    Position,
+    /// A displacement: the state of a spring or capacitor bonded at the
+    /// place (or a position of a place of no known domain).
     Displacement,
     /// The effort of a storage node (a level, a pressure, a temperature).
     Effort,

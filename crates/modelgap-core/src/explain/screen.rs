@@ -7,13 +7,15 @@
 //! | family | term | on |
 //! |---|---|---|
 //! | constant | `1` | every place |
-//! | linear | `v` | flows, displacements, efforts, inputs |
+//! | linear | `v` | flows, positions, displacements, efforts, inputs |
 //! | sign | `tanh(v/ε)`, ε scanned from sharp to smooth | flows |
 //! | Stribeck | `tanh(v/ε)·exp(−(v/v_s)²)`, `v_s` scanned | flows |
-//! | quadratic drag | `v·|v|` | flows, displacements |
-//! | cubic | `v³` | flows, displacements |
+//! | absolute | `|v|` (with `v`: viscous friction that differs by direction) | flows |
+//! | quadratic drag | `v·|v|` | flows, positions, displacements |
+//! | cubic | `v³` | flows, positions, displacements |
 //! | square root | `√max(e, 0)` | node efforts (an orifice) |
 //! | harmonics | `sin nθ`, `cos nθ`, every n in 1..=24 at once | angles |
+//! | ripple | `sin(2πx/λ)`, `cos(2πx/λ)`, λ scanned over 1/100 … 1/2 of the travel | positions |
 //! | step | `H(t − t₀)`, t₀ scanned | time |
 //! | ramp | `max(t − t₀, 0)`, t₀ scanned | time |
 //!
@@ -29,7 +31,7 @@
 
 use serde::Serialize;
 
-use super::estimate::{MissingSignal, Quantity, SignalRole};
+use super::estimate::{ActingSignal, MissingSignal, Quantity, SignalRole};
 
 /// At most this many samples enter the regression (the estimate is smooth;
 /// a longer record is decimated).
@@ -55,6 +57,8 @@ pub enum Family {
     Sign,
     /// `tanh(v/ε)·exp(−(v/v_s)²)`: the Stribeck excess at low speed.
     Stribeck,
+    /// `|v|`: with a linear term, viscous friction that differs by direction.
+    Absolute,
     /// `v·|v|`: fan, aerodynamic or turbulent drag.
     QuadraticDrag,
     /// `v³`: a hardening (or softening) spring, a cubic damper.
@@ -63,6 +67,9 @@ pub enum Family {
     SquareRoot,
     /// `sin nθ`, `cos nθ`: a ripple locked to the angle (cogging, eccentricity).
     Harmonic,
+    /// `sin(2π x/λ)`, `cos(2π x/λ)`: a ripple locked to a position, its
+    /// wavelength scanned (a linear motor's magnet pitch, a screw's lead).
+    Ripple,
     /// `H(t − t₀)`: something that changed at one time (a load, a fault).
     Step,
     /// `max(t − t₀, 0)`: a drift from one time on.
@@ -77,10 +84,12 @@ impl Family {
             Family::Linear => "a proportional term (viscous, stiffness or gain)",
             Family::Sign => "a sign-like term (Coulomb friction, a contact drop)",
             Family::Stribeck => "a Stribeck excess at low speed",
+            Family::Absolute => "a term in |v| (viscous friction that differs by direction)",
             Family::QuadraticDrag => "a quadratic drag (fan, air, turbulence)",
             Family::Cubic => "a cubic term (hardening spring, cubic damping)",
             Family::SquareRoot => "a square-root outflow (an orifice)",
             Family::Harmonic => "a ripple locked to the angle",
+            Family::Ripple => "a ripple locked to the position (a pitch)",
             Family::Step => "a step at one time (a load or a fault)",
             Family::Ramp => "a drift from one time on",
         }
@@ -281,6 +290,112 @@ fn shaped(mut t: LawTerm, stem: &str, unit: &str, value: f64, lo: f64, hi: f64) 
     t
 }
 
+/// Wavelengths of a position ripple tried: from a hundredth to half of the travel.
+const RIPPLE_PERIODS: (f64, f64) = (2.0, 100.0);
+/// Ripples offered to the selection: the best few wavelengths of the scan.
+const RIPPLE_PEAKS: usize = 3;
+
+/// Ripples locked to the position `x` (values at the screen's samples, `y` the
+/// missing signal there). Wavelengths from a hundredth to half of the travel
+/// are scanned on a grid even in wavenumber, fine enough that the phase drifts
+/// by at most π/8 over the travel; each is sized against `y` alone (a sine and
+/// a cosine, least squares), and the few that explain most become blocks whose
+/// wavelength is a shape parameter (its bounds three grid steps either way).
+fn ripples(y: &[f64], a: &ActingSignal, x: &[f64], eu: &str) -> Vec<Block> {
+    let (lo, hi) = x
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+            (l.min(*v), h.max(*v))
+        });
+    let travel = hi - lo;
+    if !(travel.is_finite() && travel > 0.0) || y.len() != x.len() {
+        return Vec::new();
+    }
+    let mean = y.iter().sum::<f64>() / y.len() as f64;
+    let tau = std::f64::consts::TAU;
+    let (k_lo, k_hi) = (
+        tau * RIPPLE_PERIODS.0 / travel,
+        tau * RIPPLE_PERIODS.1 / travel,
+    );
+    let dk = std::f64::consts::FRAC_PI_4 / travel;
+    let count = ((k_hi - k_lo) / dk).ceil() as usize + 1;
+    // The share of y each wavenumber explains (a periodogram in the position).
+    let power: Vec<f64> = (0..count)
+        .map(|i| {
+            let k = k_lo + dk * i as f64;
+            let (mut ss, mut cc, mut sc, mut sy, mut cy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+            for (xi, yi) in x.iter().zip(y) {
+                let (sn, cs) = (k * xi).sin_cos();
+                let r = yi - mean;
+                ss += sn * sn;
+                cc += cs * cs;
+                sc += sn * cs;
+                sy += sn * r;
+                cy += cs * r;
+            }
+            let det = ss * cc - sc * sc;
+            if det <= 1e-12 * ss.max(cc).powi(2) {
+                return 0.0;
+            }
+            // Explained sum of squares of the two-column fit.
+            (cc * sy * sy - 2.0 * sc * sy * cy + ss * cy * cy) / det
+        })
+        .collect();
+    let mut peaks: Vec<usize> = (0..count)
+        .filter(|&i| {
+            let left = i == 0 || power[i] >= power[i - 1];
+            let right = i + 1 == count || power[i] >= power[i + 1];
+            left && right && power[i] > 0.0
+        })
+        .collect();
+    peaks.sort_by(|&p, &q| power[q].total_cmp(&power[p]));
+    peaks.truncate(RIPPLE_PEAKS);
+    let n = &a.name;
+    let label = &a.label;
+    peaks
+        .into_iter()
+        .map(|i| {
+            let k = k_lo + dk * i as f64;
+            let lambda = tau / k;
+            let (lam_lo, lam_hi) = (tau / (k + 3.0 * dk), tau / (k - 3.0 * dk).max(0.5 * k));
+            // The cosine reads the sine's wavelength by the name the law will give it.
+            let cos_label = format!("cos(2π · {label} / {} {})", sig(lambda), a.unit);
+            Block {
+                family: Family::Ripple,
+                member: n.clone(),
+                scanned: count,
+                terms: vec![
+                    shaped(
+                        term(
+                            "c_sinx",
+                            Family::Ripple,
+                            format!("sin(2π · {label} / §)"),
+                            format!("sin({} * {n} / §)", num(tau)),
+                            eu.to_string(),
+                        ),
+                        "lam",
+                        &a.unit,
+                        lambda,
+                        lam_lo,
+                        lam_hi,
+                    ),
+                    term(
+                        "c_cosx",
+                        Family::Ripple,
+                        cos_label,
+                        format!("cos({} * {n} / lam_sinx)", num(tau)),
+                        eu.to_string(),
+                    ),
+                ],
+                columns: vec![
+                    x.iter().map(|v| (k * v).sin()).collect(),
+                    x.iter().map(|v| (k * v).cos()).collect(),
+                ],
+            }
+        })
+        .collect()
+}
+
 /// `a/(b)`, `a/b` for a simple unit, or `a` when `b` is dimensionless.
 fn per(a: &str, b: &str) -> String {
     if b.is_empty() || b == "1" {
@@ -400,9 +515,11 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
         match a.role {
             SignalRole::Flow => {
                 out.push(linear("lin"));
-                // From sharp to smooth: ten widths, log-spaced over 0.05 % … 30 % of the RMS flow.
-                let eps: Vec<f64> = (0..10)
-                    .map(|i| scale * 5e-4 * (600.0_f64).powf(i as f64 / 9.0))
+                // From sharp to smooth: 19 widths, log-spaced over 0.05 % … 30 % of the RMS
+                // flow (each 1.43 times the last: a sharp friction's width is met within 20 %,
+                // so no second term is needed to mend the shape).
+                let eps: Vec<f64> = (0..19)
+                    .map(|i| scale * 5e-4 * (600.0_f64).powf(i as f64 / 18.0))
                     .collect();
                 let (elo, ehi) = (eps[0] / 3.0, eps[eps.len() - 1] * 3.0);
                 for &e in &eps {
@@ -459,11 +576,31 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
                 }
                 out.push(quadratic("drag"));
                 out.push(cubic());
+                out.push(single(
+                    Family::Absolute,
+                    n,
+                    1,
+                    term(
+                        "c_abs",
+                        Family::Absolute,
+                        format!("|{}|", a.label),
+                        format!("abs({n})"),
+                        per(eu, u),
+                    ),
+                    v.iter().map(|x| x.abs()).collect(),
+                ));
             }
             SignalRole::Displacement => {
                 out.push(linear("lin"));
                 out.push(cubic());
                 out.push(quadratic("quad"));
+            }
+            SignalRole::Position => {
+                out.push(linear("lin"));
+                out.push(cubic());
+                out.push(quadratic("quad"));
+                let y: Vec<f64> = idx.iter().map(|&k| m.value[k]).collect();
+                out.extend(ripples(&y, a, &v, eu));
             }
             SignalRole::Angle => {
                 for order in 1..=MAX_HARMONIC {
