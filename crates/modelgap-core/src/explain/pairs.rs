@@ -1,0 +1,179 @@
+//! Second effects: what the first effect leaves. The laws discovery finds
+//! again with the first built in ([`laws_on_top`]), every candidate screened
+//! on top of it, the best few fitted jointly with it, and the pair kept only
+//! when it is significant and lowers the error on each half of the recording
+//! ([`second_effect`]).
+
+use super::*;
+
+/// A second effect on top of `best`: every other candidate fitted jointly
+/// with it (both sets of parameters free, the second started from its own
+/// best fit on top of the first). Returns the pair, ranked, and the joint
+/// residual when the best pair's gain over `reference` (the weighted residual
+/// of the best single effect) is significant.
+pub(super) fn second_effect(
+    target: &Target,
+    opts: &ExplainOptions,
+    candidates: &[Candidate],
+    best: &RankedCandidate,
+    reference: &[f64],
+    base_weighted: &[f64],
+) -> Option<(Vec<RankedCandidate>, Vec<f64>)> {
+    let n = target.n_residuals();
+    let first = best.effect();
+    // The laws of what the first leaves: the missing effort estimated again with the first
+    // built in (a Stribeck dip that Coulomb friction leaves at each reversal).
+    let rediscovered = laws_on_top(target, best);
+    let others: Vec<&Candidate> = candidates
+        .iter()
+        .chain(&rediscovered)
+        .filter(|c| c.id != first.candidate.id && !best.equivalent.contains(&c.id))
+        .collect();
+    let first_c = prepared(&first.candidate, target.rec);
+    // Screened on top of the first (one linearised step each), the best few confirmed.
+    let base = std::slice::from_ref(&first);
+    let mut screened: Vec<(f64, Candidate, Start)> = others
+        .par_iter()
+        .filter_map(|c| {
+            let c = prepared(c, target.rec);
+            let s = screen_candidate(target, base, &c, opts).ok()?;
+            Some((s.cost, c, s))
+        })
+        .collect();
+    screened.sort_by(|a, b| a.0.total_cmp(&b.0));
+    screened.truncate(PAIR_CONFIRM);
+    let pairs: Vec<(Fitted, Fitted)> = screened
+        .into_par_iter()
+        .map(|(_, c, start)| {
+            // The pair is fitted jointly from the first's values and the second's screen.
+            let second = screened_fit(&c, start);
+            let start: Vec<f64> = first.values.iter().chain(&second.values).copied().collect();
+            match fit_pair(target, &first_c, &second.candidate, &start, opts) {
+                Ok((report, weighted)) => {
+                    let (a, b) = report.params.split_at(first_c.params.len());
+                    let mut first_report = report.clone();
+                    first_report.params = a.to_vec();
+                    first_report.std_errors = report.std_errors[..a.len()].to_vec();
+                    let mut second_report = report.clone();
+                    second_report.params = b.to_vec();
+                    second_report.std_errors = report.std_errors[a.len()..].to_vec();
+                    let f1 = Fitted {
+                        candidate: first_c.clone(),
+                        values: a.to_vec(),
+                        report: Some(first_report),
+                        cost: report.cost_after,
+                        weighted: weighted.clone(),
+                        error: None,
+                        screened: false,
+                    };
+                    let f2 = Fitted {
+                        candidate: second.candidate.clone(),
+                        values: b.to_vec(),
+                        report: Some(second_report),
+                        cost: report.cost_after,
+                        weighted,
+                        error: None,
+                        screened: false,
+                    };
+                    (f1, f2)
+                }
+                Err(e) => {
+                    let mut f = failed_clone(&second);
+                    f.error = Some(e.to_string());
+                    (f, second)
+                }
+            }
+        })
+        .collect();
+    // Each pair's evidence over the best single, its second effect's parameters counted; a
+    // discovered law must beat a named effect of the menu by the significance margin.
+    let gain_of = |joint_first: &Fitted, second: &Fitted| {
+        let rhos2 = target.rhos(&joint_first.weighted);
+        let k2 = second.candidate.params.len() - target.n_calibration(&second.candidate);
+        score(
+            target.whitened_cost(reference, &rhos2),
+            target.whitened_cost(&joint_first.weighted, &rhos2),
+            k2,
+            target.n_whitened(),
+        )
+    };
+    let preference = |second: &Fitted, gain: f64| {
+        let law = second.candidate.id.starts_with("law@") || first.candidate.id.starts_with("law@");
+        gain - if law { opts.significance } else { 0.0 }
+    };
+    let (joint_first, second, gain) = pairs
+        .iter()
+        .filter(|(a, b)| a.error.is_none() && b.error.is_none())
+        .map(|(a, b)| (a, b, gain_of(a, b)))
+        .max_by(|x, y| preference(x.1, x.2).total_cmp(&preference(y.1, y.2)))?;
+    let n_eff2 = target.n_eff(&joint_first.weighted);
+    let rhos2 = target.rhos(&joint_first.weighted);
+    if gain <= opts.significance {
+        return None;
+    }
+    // A law holds throughout: the pair must lower the error on each half of the recording
+    // (unless the second effect is itself an event at one time).
+    let timed = (second.candidate.params.iter()).any(|p| p.unit == "s" && p.name.starts_with('t'));
+    if !timed && !lowers_each_half(target, reference, &joint_first.weighted) {
+        return None;
+    }
+    let white2 = Whitening {
+        cost_before: target.whitened_cost(base_weighted, &rhos2),
+        rhos: rhos2,
+    };
+    let mut first_ranked = ranked(target, joint_first, &white2, n_eff2, n);
+    first_ranked.candidate = best.candidate.clone();
+    let mut second_ranked = ranked(target, second, &white2, n_eff2, n);
+    second_ranked.score = gain;
+    Some((
+        vec![first_ranked, second_ranked],
+        joint_first.weighted.clone(),
+    ))
+}
+
+/// The candidates of the laws found where the model with `best` built in (and the
+/// calibration as fitted with it) still misses an effort or flow: discovery's estimate
+/// and screen once more, on what the first effect leaves. Empty when the estimate fails.
+pub(super) fn laws_on_top(target: &Target, best: &RankedCandidate) -> Vec<Candidate> {
+    let calibration = (best.calibration.clone())
+        .map(|e| (e.candidate, e.values))
+        .or_else(|| (target.calibration.clone()).map(|c| (c.clone(), c.initial())));
+    let first = best.effect();
+    let effects: Vec<(Candidate, Vec<f64>)> = calibration
+        .into_iter()
+        .chain(std::iter::once((first.candidate, first.values)))
+        .collect();
+    let effects: Vec<(&Candidate, &[f64])> =
+        effects.iter().map(|(c, v)| (c, v.as_slice())).collect();
+    let Ok(mut missing) =
+        (target.model).missing_signals(target.rec, &effects, &target.names, &target.sigma)
+    else {
+        return Vec::new();
+    };
+    missing.sort_by(|a, b| b.explained.total_cmp(&a.explained));
+    let linear = target.calibration.is_none();
+    let most = missing.first().map_or(0.0, |m| m.explained);
+    missing
+        .par_iter()
+        .filter(|m| m.explained >= 0.5 * most && m.explained > 0.05)
+        .filter_map(|m| screen::screen_with(m, linear))
+        .filter_map(|l| target.model.law_candidate(&l))
+        .collect()
+}
+
+/// Whether `after` leaves less than `before` on each half of the recording
+/// (all outputs together; weighted residuals, output after output).
+pub(super) fn lowers_each_half(target: &Target, before: &[f64], after: &[f64]) -> bool {
+    let n = target.rec.len();
+    let half = n / 2;
+    [0..half, half..n].into_iter().all(|range| {
+        let (mut b, mut a) = (0.0, 0.0);
+        for j in 0..target.names.len() {
+            for k in range.clone() {
+                b += before[j * n + k].powi(2);
+                a += after[j * n + k].powi(2);
+            }
+        }
+        a < b
+    })
+}
