@@ -46,6 +46,10 @@ struct Hidden {
     sensor_step: f64,
     /// The driver's dead zone (V): it delivers sign(v) max(|v| − δ, 0).
     dead_zone: f64,
+    /// The speed sensor's gain (a tachometer constant off).
+    sensor_gain: Option<f64>,
+    /// The speed sensor's pure delay, in whole samples.
+    sensor_delay: usize,
 }
 
 const R: f64 = 1.0;
@@ -138,6 +142,14 @@ fn record(h: &Hidden, white: f64, coloured: f64, seed: u64) -> Recording {
             })
             .collect()
     };
+    let mut om = om;
+    if let Some(g) = h.sensor_gain {
+        om.iter_mut().for_each(|w| *w *= g);
+    }
+    if h.sensor_delay > 0 {
+        let d = h.sensor_delay;
+        om = (0..om.len()).map(|k| om[k.saturating_sub(d)]).collect();
+    }
     let ti = noisy(&ti);
     let om = if h.sensor_step > 0.0 { om } else { noisy(&om) };
     Recording::new(
@@ -300,6 +312,20 @@ fn cases() -> Vec<(&'static str, Hidden)> {
             },
         ),
         (
+            "speed sensor gain 0.97",
+            Hidden {
+                sensor_gain: Some(0.97),
+                ..Hidden::default()
+            },
+        ),
+        (
+            "speed sensor delay 3 ms",
+            Hidden {
+                sensor_delay: 3,
+                ..Hidden::default()
+            },
+        ),
+        (
             "sensor quantised",
             Hidden {
                 sensor_step: 0.5,
@@ -387,6 +413,20 @@ fn a_lagging_quantised_speed_sensor_is_named_and_its_steps_recognised() {
     within(value(&params, "tau", &text), 4e-3, 0.05, &text);
     assert!(text.contains("quantised in steps of 0.5"), "{text}");
     at_floor(&ex, &text);
+}
+
+#[test]
+fn a_speed_sensor_that_reads_low_or_late_is_named_as_such() {
+    let ex = explained(&record(&case("speed sensor gain 0.97"), 2e-3, 0.0, 15));
+    let (ids, params, text) = chosen(&ex);
+    assert_eq!(ids, ["scale@omega"], "{text}");
+    within(value(&params, "k_sensor", &text), 0.97, 0.005, &text);
+    at_floor(&ex, &text);
+    // Three samples late: a delay, not a lag (a lag of the same size leaves 1.06x).
+    let ex = explained(&record(&case("speed sensor delay 3 ms"), 1e-3, 2e-3, 16));
+    let (ids, params, text) = chosen(&ex);
+    assert_eq!(ids, ["delay@omega"], "{text}");
+    within(value(&params, "delay", &text), 3e-3, 0.05, &text);
 }
 
 #[test]

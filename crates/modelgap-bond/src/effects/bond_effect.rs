@@ -10,7 +10,8 @@ use super::tag::Tag;
 use super::{
     ActuatorGain, Brush, Calibration, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation,
     Factor, Fault, Faulted, Heating, Inertia, Inflow, Junction, LawEffect, Leak, Load, Node,
-    Orifice, Overflow, Saturation, SensorLag, SensorOffset, Stiffness, Store, Viscous,
+    Orifice, Overflow, Saturation, SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness,
+    Store, Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::BondGraph;
@@ -63,6 +64,10 @@ pub enum BondEffect {
     Lag(SensorLag),
     /// `offset@<output>`: a constant offset in an output's sensor.
     Offset(SensorOffset),
+    /// `scale@<output>`: a gain in an output's sensor.
+    Scale(SensorScale),
+    /// `delay@<output>`: a pure delay in an output's sensor.
+    Delay(SensorDelay),
     /// `declared:<name>`: an effect the model file declares.
     Declared(Declared),
     /// `law@<place>:<formula>`: a law discovery found (never on the menu).
@@ -114,6 +119,18 @@ impl From<ActuatorGain> for BondEffect {
 impl From<SensorOffset> for BondEffect {
     fn from(k: SensorOffset) -> BondEffect {
         BondEffect::Offset(k)
+    }
+}
+
+impl From<SensorScale> for BondEffect {
+    fn from(k: SensorScale) -> BondEffect {
+        BondEffect::Scale(k)
+    }
+}
+
+impl From<SensorDelay> for BondEffect {
+    fn from(k: SensorDelay) -> BondEffect {
+        BondEffect::Delay(k)
     }
 }
 
@@ -276,6 +293,26 @@ impl BondEffect {
                 })?;
                 Some(BondEffect::Offset(o))
             }
+            Tag::Scale => {
+                let o = SensorScale::named(g, target).ok_or_else(|| {
+                    bad(
+                        c,
+                        "",
+                        format!("the model has no output '{target}' a sensor gain can scale"),
+                    )
+                })?;
+                Some(BondEffect::Scale(o))
+            }
+            Tag::Delay => {
+                let o = SensorDelay::named(g, target).ok_or_else(|| {
+                    bad(
+                        c,
+                        "",
+                        format!("the model has no output '{target}' a delay can hold back"),
+                    )
+                })?;
+                Some(BondEffect::Delay(o))
+            }
             Tag::Declared => Some(BondEffect::Declared(
                 Declared::named(g, target).ok_or_else(|| {
                     bad(c, "", format!("the model declares no candidate '{target}'"))
@@ -331,6 +368,8 @@ impl BondEffect {
             BondEffect::Gain(k) => k,
             BondEffect::Lag(k) => k,
             BondEffect::Offset(k) => k,
+            BondEffect::Scale(k) => k,
+            BondEffect::Delay(k) => k,
             BondEffect::Declared(k) => k,
             BondEffect::Law(k) => k,
             BondEffect::Calibration(k) => k,
@@ -363,6 +402,8 @@ impl BondEffect {
             | BondEffect::Gain(_)
             | BondEffect::Lag(_)
             | BondEffect::Offset(_)
+            | BondEffect::Scale(_)
+            | BondEffect::Delay(_)
             | BondEffect::Declared(_)
             | BondEffect::Law(_)
             | BondEffect::Calibration(_) => None,
@@ -422,6 +463,8 @@ impl BondEffect {
             Tag::Gain => ActuatorGain::vanishing_values(c),
             Tag::Lag => SensorLag::vanishing_values(c),
             Tag::Offset => SensorOffset::vanishing_values(c),
+            Tag::Scale => SensorScale::vanishing_values(c),
+            Tag::Delay => SensorDelay::vanishing_values(c),
             Tag::Law => LawEffect::vanishing_values(c),
         }
     }

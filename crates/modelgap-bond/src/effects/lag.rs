@@ -101,31 +101,46 @@ impl EffectDef for SensorLag {
             "s",
             &format!("time constant of the sensor of {name} {}", added(c)),
         )?;
-        let node = g.add(
-            Element::zero(&format!("sensor_{suffix}"))
-                .described(&format!("the sensor of {name}: its reading")),
-        )?;
-        let mut source = Element::sf(&format!("sensed_{suffix}"), &tau)
-            .described(&format!("what the sensor of {name} follows"));
-        source.law = Law::Source(signal);
-        let source = g.add(source)?;
-        g.bond(source, node)?;
-        let mut store = Element::c(&format!("lag_{suffix}"), &tau);
-        store.description = "the sensor's lag".to_string();
-        let store = g.add(store)?;
-        g.bond(node, store)?;
-        let leak = g.add(
-            Element::nonlinear(
-                &format!("relax_{suffix}"),
-                ElementKind::R,
-                None,
-                Some(law(c, "e")?),
-            )
-            .described("the sensor relaxing to what it follows"),
-        )?;
-        g.bond(node, leak)?;
-        let node_name = g.element(node).name.clone();
-        g.set_output(&name, Measured::Effort(node_name))?;
+        let node = lag_stage(g, c, &name, signal, Expr::Param(tau))?;
+        g.set_output(&name, Measured::Effort(node))?;
         Ok(Vec::new())
     }
+}
+
+/// Adds the signal elements of a first-order lag of time constant `tau`
+/// following `signal` (see the module docs), for the sensor of output `name`;
+/// returns the name of the 0-junction whose effort is the lagged signal.
+pub(super) fn lag_stage(
+    g: &mut BondGraph,
+    c: &Candidate,
+    name: &str,
+    signal: Expr,
+    tau: Expr,
+) -> Result<String> {
+    let suffix = ident(name);
+    let node = g.add(
+        Element::zero(&format!("sensor_{suffix}"))
+            .described(&format!("the sensor of {name}: its reading")),
+    )?;
+    let mut source = Element::sf(&format!("sensed_{suffix}"), "0")
+        .described(&format!("what the sensor of {name} follows"));
+    source.law = Law::Source(signal);
+    let source = g.add(source)?;
+    g.bond(source, node)?;
+    let mut store = Element::c(&format!("lag_{suffix}"), "1");
+    store.law = Law::Linear(tau);
+    store.description = "the sensor's lag".to_string();
+    let store = g.add(store)?;
+    g.bond(node, store)?;
+    let leak = g.add(
+        Element::nonlinear(
+            &format!("relax_{suffix}"),
+            ElementKind::R,
+            None,
+            Some(law(c, "e")?),
+        )
+        .described("the sensor relaxing to what it follows"),
+    )?;
+    g.bond(node, leak)?;
+    Ok(g.element(node).name.clone())
 }

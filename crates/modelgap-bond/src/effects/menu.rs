@@ -8,8 +8,8 @@ use super::def::EffectDef;
 use super::scales::Scales;
 use super::{
     ActuatorGain, Brush, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault,
-    Heating, Inertia, Inflow, Leak, Load, Orifice, Overflow, Saturation, SensorLag, SensorOffset,
-    Stiffness, Store, Viscous,
+    Heating, Inertia, Inflow, Leak, Load, Orifice, Overflow, Saturation, SensorDelay, SensorLag,
+    SensorOffset, SensorScale, Stiffness, Store, Viscous,
 };
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
@@ -56,7 +56,12 @@ use crate::graph::{BondGraph, ElementId};
 ///   `δ` from 0 to the largest value the source imposed), and `gain@<source>`
 ///   (the value becomes `k v`, `k` in [0.2, 2]).
 /// - On each output: `lag@<output>` (a first-order lag `τ` in its sensor, from
-///   a tenth of the sample interval to a fifth of the recording; one state).
+///   a tenth of the sample interval to a fifth of the recording; one state),
+///   `offset@<output>` (a constant `b` added to its reading, within ± the
+///   output's peak) and `scale@<output>` (its reading `k` times the value, `k`
+///   in [0.5, 2]; both the output's expression, no state), and
+///   `delay@<output>` (it reports `d` late, from a tenth of a sample interval
+///   to fifty; a first-order Padé all-pass, one state).
 /// - Each effect the model file declares (`[[candidates]]`): `declared:<name>`.
 /// - For each electrical I with a linear law: `saturation@<I>`
 ///   (`f = p / L · (1 + a_sat p²)`, `a_sat` ≥ 0 in 1/Wb², scale `0.1 / p_peak²`
@@ -140,6 +145,8 @@ pub fn offered(g: &BondGraph) -> Vec<BondEffect> {
     out.extend(of::<ActuatorGain>(g));
     out.extend(of::<SensorLag>(g));
     out.extend(of::<SensorOffset>(g));
+    out.extend(of::<SensorScale>(g));
+    out.extend(of::<SensorDelay>(g));
     out.extend(of::<Declared>(g));
     out
 }

@@ -62,7 +62,9 @@
 //! - on a source an input drives, in any domain: [`deadzone`](DeadZone) and
 //!   [`gain`](ActuatorGain) (the actuator delivers `k` times its command);
 //! - on every output: [`lag`](SensorLag) (a first-order lag in its sensor) and
-//!   [`offset`](SensorOffset) (a constant added to its reading);
+//!   [`offset`](SensorOffset) (a constant added to its reading) and
+//!   [`scale`](SensorScale) (its reading `k` times the value) and
+//!   [`delay`](SensorDelay) (it reports late, any fraction of a sample);
 //! - declared by the model file (`[[candidates]]`): [`declared`](Declared);
 //! - never on the menu: [`calibration`](Calibration), the graph's own unknowns
 //!   (free parameters and initial states) that calibration fits.
@@ -84,6 +86,7 @@ mod coupling;
 mod deadzone;
 mod declared;
 mod def;
+mod delay;
 mod deviation;
 mod domain;
 mod edit;
@@ -104,6 +107,7 @@ mod offset;
 mod orifice;
 mod overflow;
 mod saturation;
+mod scale;
 mod scales;
 mod stiffness;
 mod store;
@@ -126,6 +130,7 @@ pub use coupling::Coupling;
 pub use deadzone::DeadZone;
 pub use declared::Declared;
 pub use def::{EffectDef, QualTarget};
+pub use delay::SensorDelay;
 pub use deviation::Deviation;
 pub use domain::Domain;
 pub(crate) use edit::attach;
@@ -147,6 +152,7 @@ pub use offset::SensorOffset;
 pub use orifice::Orifice;
 pub use overflow::Overflow;
 pub use saturation::Saturation;
+pub use scale::SensorScale;
 pub use scales::Scales;
 pub use stiffness::Stiffness;
 pub use store::Store;

@@ -28,13 +28,15 @@ pub(super) enum Tag {
     Gain,
     Lag,
     Offset,
+    Scale,
+    Delay,
     Declared,
     Law,
     Calibration,
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 24] = [
+const PREFIXES: [(Tag, &str); 26] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -56,6 +58,8 @@ const PREFIXES: [(Tag, &str); 24] = [
     (Tag::Gain, "gain@"),
     (Tag::Lag, "lag@"),
     (Tag::Offset, "offset@"),
+    (Tag::Scale, "scale@"),
+    (Tag::Delay, "delay@"),
     (Tag::Declared, "declared:"),
     (Tag::Law, "law@"),
     (Tag::Calibration, "calibration"),
@@ -117,7 +121,7 @@ mod tests {
     fn the_expected_prefixes_read_as_a_list() {
         assert_eq!(
             Tag::expected(),
-            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@, gain@, lag@, offset@, declared: or law@"
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@, gain@, lag@, offset@, scale@, delay@, declared: or law@"
         );
     }
 }
