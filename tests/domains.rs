@@ -155,10 +155,30 @@ fn explained(model: &str, rec: &Recording) -> modelgap::Explanation {
     explain(&model, rec, &ExplainOptions::default()).unwrap()
 }
 
+/// The coefficient and exponent of the power law chosen first, which must act at `place`.
+fn power_law_at(ex: &modelgap::Explanation, place: &str) -> (f64, f64) {
+    let text = modelgap::story::explanation_text(ex, 6);
+    let first = ex
+        .chosen
+        .first()
+        .unwrap_or_else(|| panic!("nothing chosen:\n{text}"));
+    assert!(
+        first.candidate.id.starts_with(&format!("law@{place}:"))
+            && first.candidate.id.contains("abs("),
+        "a power law at {place} must be chosen:\n{text}"
+    );
+    let get = |n: &str| {
+        (first.params.iter().find(|p| p.name == n))
+            .unwrap_or_else(|| panic!("no {n}:\n{text}"))
+            .value
+    };
+    (get("c_pow"), get("p_pow"))
+}
+
 #[test]
-fn a_hidden_porous_leak_is_named_leakage_from_its_tank() {
-    // Seepage through a porous wall: flow ∝ level^1.15 (the candidate is linear in the level,
-    // the orifice a square root).
+fn a_hidden_porous_leak_is_named_a_power_law_of_its_tanks_level() {
+    // Seepage through a porous wall: flow ∝ level^1.15 (the menu's leak is linear in the
+    // level, its orifice a square root: the screen's power law says it as it is).
     let truth = with_outflow("tank1", "seep", "1.5e-4 * max(e, 0)^1.15");
     let rec = record(
         &truth,
@@ -174,15 +194,25 @@ fn a_hidden_porous_leak_is_named_leakage_from_its_tank() {
         "{:?}",
         ex.verdict
     );
-    let best = &ex.chosen[0].candidate;
-    assert_eq!(best.id, "leak@tank1", "chose {} ({})", best.id, best.name);
-    assert!(best.name.starts_with("leakage from"), "{}", best.name);
+    let (c, p) = power_law_at(&ex, "tank1");
+    assert!((c - 1.5e-4).abs() < 0.05 * 1.5e-4, "{c}");
+    assert!((p - 1.15).abs() < 0.05 * 1.15, "{p}");
+    // The menu's nearest named effect is still the linear leak.
+    let leak = ex
+        .ranked
+        .iter()
+        .position(|r| r.candidate.id == "leak@tank1");
+    let orifice = ex
+        .ranked
+        .iter()
+        .position(|r| r.candidate.id == "orifice@tank1");
+    assert!(leak.unwrap() < orifice.unwrap());
 }
 
 #[test]
-fn a_hidden_valve_with_a_turbulent_law_is_named_an_orifice_of_its_tank() {
+fn a_hidden_valve_with_a_turbulent_law_is_named_with_its_exponent() {
     // A drain valve whose flow goes as level^0.55 (a real valve's exponent, not the
-    // candidate's square root; the leak is linear).
+    // orifice's square root; the leak is linear).
     let truth = with_outflow("tank1", "drain", "2.2e-4 * max(e, 0)^0.55");
     let rec = record(
         &truth,
@@ -193,14 +223,20 @@ fn a_hidden_valve_with_a_turbulent_law_is_named_an_orifice_of_its_tank() {
         0.002,
     );
     let ex = explained(TANKS, &rec);
-    let best = &ex.chosen.first().expect("an effect is chosen").candidate;
-    assert_eq!(
-        best.id, "orifice@tank1",
-        "chose {} ({})",
-        best.id, best.name
+    let (c, p) = power_law_at(&ex, "tank1");
+    assert!((c - 2.2e-4).abs() < 0.05 * 2.2e-4, "{c}");
+    assert!((p - 0.55).abs() < 0.05 * 0.55, "{p}");
+    // Among the menu's named effects, the orifice (its unit m^3/s/m^0.5) ranks first.
+    let named = (ex.ranked.iter())
+        .find(|r| !r.candidate.id.starts_with("law@"))
+        .unwrap();
+    assert_eq!(named.candidate.id, "orifice@tank1");
+    assert!(
+        named.candidate.name.contains("orifice"),
+        "{}",
+        named.candidate.name
     );
-    assert!(best.name.contains("orifice"), "{}", best.name);
-    assert_eq!(best.params[0].unit, "m^3/s/m^0.5");
+    assert_eq!(named.candidate.params[0].unit, "m^3/s/m^0.5");
 }
 
 #[test]
@@ -319,8 +355,8 @@ unit = "K"
 "#;
 
 #[test]
-fn hidden_convection_is_named_heat_loss_to_ambient_from_the_plate() {
-    // Natural convection: heat flow ∝ ΔT^1.25 (the candidate is linear in ΔT).
+fn hidden_convection_is_named_a_power_law_of_the_plates_temperature() {
+    // Natural convection: heat flow ∝ ΔT^1.25 (the menu's heat loss is linear in ΔT).
     let truth = ROOM.replace(
         "[[outputs]]",
         "[[elements]]\nname = \"air\"\nkind = \"R\"\nflow = \"0.4 * max(e, 0)^1.25\"\n\n[[bonds]]\nfrom = \"plate\"\nto = \"air\"\n\n[[outputs]]",
@@ -334,17 +370,18 @@ fn hidden_convection_is_named_heat_loss_to_ambient_from_the_plate() {
         0.05,
     );
     let ex = explained(ROOM, &rec);
-    let best = &ex.chosen.first().expect("an effect is chosen").candidate;
-    assert_eq!(
-        best.id,
-        "leak@plate",
-        "{}",
-        modelgap::story::explanation_text(&ex, 6)
-    );
+    let (c, p) = power_law_at(&ex, "plate");
+    assert!((c - 0.4).abs() < 0.05 * 0.4, "{c}");
+    assert!((p - 1.25).abs() < 0.05 * 1.25, "{p}");
+    // The menu's nearest named effect is the heat loss to ambient from the plate.
+    let named = (ex.ranked.iter())
+        .find(|r| !r.candidate.id.starts_with("law@"))
+        .unwrap();
+    assert_eq!(named.candidate.id, "leak@plate");
     assert!(
-        best.name.starts_with("heat loss to ambient"),
+        named.candidate.name.starts_with("heat loss to ambient"),
         "{}",
-        best.name
+        named.candidate.name
     );
 }
 

@@ -305,6 +305,21 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
                 "      screened only: sized by one linearised step, not confirmed by a fit"
             );
         }
+        if i == 0 && !r.equivalent.is_empty() {
+            let names: Vec<&str> = (r.equivalent.iter())
+                .map(|id| {
+                    (ex.ranked.iter())
+                        .find(|o| o.candidate.id == *id)
+                        .map_or(id.as_str(), |o| o.candidate.name.as_str())
+                })
+                .collect();
+            let _ = writeln!(
+                s,
+                "      fits exactly as well as: {} (as many parameters: the same physics said \
+                 another way, or effects this recording cannot separate)",
+                names.join("; ")
+            );
+        }
         if i == 0 && !r.indistinct.is_empty() {
             let _ = writeln!(
                 s,

@@ -14,6 +14,7 @@
 //! | quadratic drag | `v·|v|` | flows, positions, displacements |
 //! | cubic | `v³` | flows, positions, displacements |
 //! | square root | `√max(e, 0)` | node efforts (an orifice) |
+//! | power | `sign(e)·|e|^p`, p scanned over 0.3 … 3 | node efforts (seepage, convection) |
 //! | harmonics | `sin nθ`, `cos nθ`, every n in 1..=24 at once | angles |
 //! | ripple | `sin(2πx/λ)`, `cos(2πx/λ)`, λ scanned over 1/100 … 1/2 of the travel | positions |
 //! | step | `H(t − t₀)`, t₀ scanned | time |
@@ -65,6 +66,8 @@ pub enum Family {
     Cubic,
     /// `√e`: a free outflow through an orifice.
     SquareRoot,
+    /// `sign(e)|e|^p`, `p` scanned: seepage, convection, a mixed outflow.
+    Power,
     /// `sin nθ`, `cos nθ`: a ripple locked to the angle (cogging, eccentricity).
     Harmonic,
     /// `sin(2π x/λ)`, `cos(2π x/λ)`: a ripple locked to a position, its
@@ -88,6 +91,7 @@ impl Family {
             Family::QuadraticDrag => "a quadratic drag (fan, air, turbulence)",
             Family::Cubic => "a cubic term (hardening spring, cubic damping)",
             Family::SquareRoot => "a square-root outflow (an orifice)",
+            Family::Power => "a power law (seepage, convection, a mixed outflow)",
             Family::Harmonic => "a ripple locked to the angle",
             Family::Ripple => "a ripple locked to the position (a pitch)",
             Family::Step => "a step at one time (a load or a fault)",
@@ -289,6 +293,12 @@ fn shaped(mut t: LawTerm, stem: &str, unit: &str, value: f64, lo: f64, hi: f64) 
     });
     t
 }
+
+/// Exponents of the power-law term of an effort (1, the linear term, and ½,
+/// the square root, are families of their own).
+const POWERS: [f64; 14] = [
+    0.3, 0.4, 0.6, 0.7, 0.8, 0.9, 1.1, 1.2, 1.3, 1.5, 1.75, 2.0, 2.5, 3.0,
+];
 
 /// Wavelengths of a position ripple tried: from a hundredth to half of the travel.
 const RIPPLE_PERIODS: (f64, f64) = (2.0, 100.0);
@@ -651,6 +661,35 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
                     ),
                     v.iter().map(|x| x.max(0.0).sqrt()).collect(),
                 ));
+                // A power law of the effort, its exponent scanned: seepage (1.1–1.3), an
+                // outflow between laminar and turbulent, natural convection (1.25–1.33).
+                let (plo, phi) = (POWERS[0] / 1.5, POWERS[POWERS.len() - 1] * 1.5);
+                for &p in &POWERS {
+                    out.push(single(
+                        Family::Power,
+                        n,
+                        POWERS.len(),
+                        shaped(
+                            term(
+                                "c_pow",
+                                Family::Power,
+                                format!("sign({0}) |{0}|^§", a.label),
+                                format!("sign({n}) * abs({n})^§"),
+                                if u.is_empty() {
+                                    eu.clone()
+                                } else {
+                                    format!("{eu}/({u})^p")
+                                },
+                            ),
+                            "p",
+                            "1",
+                            p,
+                            plo,
+                            phi,
+                        ),
+                        v.iter().map(|x| x.signum() * x.abs().powf(p)).collect(),
+                    ));
+                }
             }
             // An input's gain is the menu's typed `gain@` effect on its source; as a law
             // term beside steps it mimics a sign of the flow under a staircase drive.
@@ -839,6 +878,23 @@ pub fn screen_with(m: &MissingSignal, linear: bool) -> Option<Law> {
         }
         let Some((bi, new_rss)) = best else { break };
         let b = &lib[bi];
+        // The independent samples are those of what the law would leave (the estimate's own
+        // noise), not of what it explains: a missing flow that is a clean step is as smooth
+        // as a signal gets, and counted on itself it would be worth two samples.
+        let n_eff = {
+            let cols: Vec<&[f64]> = (chosen.iter().chain(std::iter::once(&bi)))
+                .flat_map(|&c| lib[c].columns.iter().map(Vec::as_slice))
+                .collect();
+            match wls(&cols, &y, &w) {
+                Some((beta, _, _)) => {
+                    let left: Vec<f64> = (0..n)
+                        .map(|r| y[r] - (0..beta.len()).map(|i| beta[i] * cols[i][r]).sum::<f64>())
+                        .collect();
+                    effective(&left).max(n_eff)
+                }
+                None => n_eff,
+            }
+        };
         // A shape the scan chose (a width, a Stribeck speed, a step's time) is a parameter
         // the confirming fit frees: it counts as one.
         let shaped = b.terms.iter().filter(|t| t.shape.is_some()).count();
