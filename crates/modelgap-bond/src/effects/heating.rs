@@ -34,17 +34,14 @@ pub struct Heating {
 }
 
 impl Heating {
-    /// Heating of the R element `id` of `g`: an R with a positive linear law
-    /// bonded to an electrical 1-junction (one whose inertance is in H).
+    /// Heating of the R element `id` of `g`: an R with a linear law bonded to
+    /// an electrical 1-junction (one whose inertance is in H).
     pub fn at(g: &BondGraph, id: ElementId) -> Option<Heating> {
         let el = g.element(id);
         if el.kind != ElementKind::R {
             return None;
         }
-        let Law::Linear(x) = &el.law else {
-            return None;
-        };
-        if law_value(g, x).is_none_or(|v| v <= 0.0) {
+        if !matches!(el.law, Law::Linear(_)) {
             return None;
         }
         let [(bond, _)] = g.ports(id)[..] else {
@@ -69,9 +66,12 @@ impl Heating {
 }
 
 impl EffectDef for Heating {
+    /// Every such R whose resistance is positive in the model as given (a
+    /// calibration may later take it to 0, where heating does nothing).
     fn offers(g: &BondGraph) -> Vec<Heating> {
         g.element_ids()
             .filter_map(|id| Heating::at(g, id))
+            .filter(|h| h.resistance(g).is_some_and(|(_, v)| v > 0.0))
             .collect()
     }
 
