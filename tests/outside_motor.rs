@@ -46,6 +46,8 @@ struct Hidden {
     sensor_step: f64,
     /// The driver's dead zone (V): it delivers sign(v) max(|v| − δ, 0).
     dead_zone: f64,
+    /// The driver's limit (V): it delivers at most this either way.
+    limit: Option<f64>,
     /// The speed sensor's gain (a tachometer constant off).
     sensor_gain: Option<f64>,
     /// The speed sensor's pure delay, in whole samples.
@@ -67,6 +69,7 @@ fn derivative(h: &Hidden, v: f64, t: f64, x: [f64; 5]) -> [f64; 5] {
     let w = x[1] / J;
     let r = R * (1.0 + h.heating * x[3]);
     let vd = v.signum() * (v.abs() - h.dead_zone).max(0.0) * h.driver_gain.unwrap_or(1.0);
+    let vd = h.limit.map_or(vd, |l| vd.clamp(-l, l));
     let extra = h.torque.map_or(0.0, |f| f(w, x[2], t));
     let sensor = if h.sensor_lag > 0.0 {
         (w - x[4]) / h.sensor_lag
@@ -142,7 +145,6 @@ fn record(h: &Hidden, white: f64, coloured: f64, seed: u64) -> Recording {
             })
             .collect()
     };
-    let mut om = om;
     if let Some(g) = h.sensor_gain {
         om.iter_mut().for_each(|w| *w *= g);
     }
@@ -304,6 +306,13 @@ fn cases() -> Vec<(&'static str, Hidden)> {
             },
         ),
         (
+            "driver limit 6 V",
+            Hidden {
+                limit: Some(6.0),
+                ..Hidden::default()
+            },
+        ),
+        (
             "sensor lag+quantised",
             Hidden {
                 sensor_lag: 4e-3,
@@ -427,6 +436,15 @@ fn a_speed_sensor_that_reads_low_or_late_is_named_as_such() {
     let (ids, params, text) = chosen(&ex);
     assert_eq!(ids, ["delay@omega"], "{text}");
     within(value(&params, "delay", &text), 3e-3, 0.05, &text);
+}
+
+#[test]
+fn a_driver_at_its_rail_is_named_a_limit() {
+    let ex = explained(&record(&case("driver limit 6 V"), 2e-3, 0.0, 17));
+    let (ids, params, text) = chosen(&ex);
+    assert_eq!(ids, ["limit@V"], "{text}");
+    within(value(&params, "v_max", &text), 6.0, 0.05, &text);
+    at_floor(&ex, &text);
 }
 
 #[test]

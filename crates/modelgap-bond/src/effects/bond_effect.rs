@@ -8,10 +8,10 @@ use super::edit::bad;
 use super::scales::Scales;
 use super::tag::Tag;
 use super::{
-    ActuatorGain, Brush, Calibration, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation,
-    Factor, Fault, Faulted, Heating, Inertia, Inflow, Junction, LawEffect, Leak, Load, Node,
-    Orifice, Overflow, Saturation, SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness,
-    Store, Viscous,
+    ActuatorGain, ActuatorLimit, Brush, Calibration, Cogging, Coulomb, Coupling, DeadZone,
+    Declared, Deviation, Factor, Fault, Faulted, Heating, Inertia, Inflow, Junction, LawEffect,
+    Leak, Load, Node, Orifice, Overflow, Saturation, SensorDelay, SensorLag, SensorOffset,
+    SensorScale, Stiffness, Store, Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::BondGraph;
@@ -60,6 +60,8 @@ pub enum BondEffect {
     DeadZone(DeadZone),
     /// `gain@<source>`: a gain on what a driven source imposes.
     Gain(ActuatorGain),
+    /// `limit@<source>`: a driven source that saturates.
+    Limit(ActuatorLimit),
     /// `lag@<output>`: a first-order lag in an output's sensor.
     Lag(SensorLag),
     /// `offset@<output>`: a constant offset in an output's sensor.
@@ -113,6 +115,12 @@ from_kind!(
 impl From<ActuatorGain> for BondEffect {
     fn from(k: ActuatorGain) -> BondEffect {
         BondEffect::Gain(k)
+    }
+}
+
+impl From<ActuatorLimit> for BondEffect {
+    fn from(k: ActuatorLimit) -> BondEffect {
+        BondEffect::Limit(k)
     }
 }
 
@@ -273,6 +281,17 @@ impl BondEffect {
                 })?;
                 Some(BondEffect::Gain(k))
             }
+            Tag::Limit => {
+                let k = g.find(target).and_then(|id| ActuatorLimit::at(g, id));
+                let k = k.ok_or_else(|| {
+                    bad(
+                        c,
+                        "",
+                        format!("the model has no source '{target}' driven by an input"),
+                    )
+                })?;
+                Some(BondEffect::Limit(k))
+            }
             Tag::Lag => {
                 let l = SensorLag::named(g, target).ok_or_else(|| {
                     bad(
@@ -366,6 +385,7 @@ impl BondEffect {
             BondEffect::Store(k) => k,
             BondEffect::DeadZone(k) => k,
             BondEffect::Gain(k) => k,
+            BondEffect::Limit(k) => k,
             BondEffect::Lag(k) => k,
             BondEffect::Offset(k) => k,
             BondEffect::Scale(k) => k,
@@ -400,6 +420,7 @@ impl BondEffect {
             | BondEffect::Store(_)
             | BondEffect::DeadZone(_)
             | BondEffect::Gain(_)
+            | BondEffect::Limit(_)
             | BondEffect::Lag(_)
             | BondEffect::Offset(_)
             | BondEffect::Scale(_)
@@ -461,6 +482,7 @@ impl BondEffect {
             Tag::Store => Store::vanishing_values(c),
             Tag::DeadZone => DeadZone::vanishing_values(c),
             Tag::Gain => ActuatorGain::vanishing_values(c),
+            Tag::Limit => ActuatorLimit::vanishing_values(c),
             Tag::Lag => SensorLag::vanishing_values(c),
             Tag::Offset => SensorOffset::vanishing_values(c),
             Tag::Scale => SensorScale::vanishing_values(c),

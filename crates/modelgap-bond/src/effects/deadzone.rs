@@ -39,7 +39,7 @@ impl DeadZone {
 
     /// The unit of what the source imposes: the unit of the input it names
     /// when the law is that input alone, else `e` or `f`.
-    fn unit(self, g: &BondGraph) -> String {
+    pub(super) fn unit(self, g: &BondGraph) -> String {
         let el = g.element(self.source);
         if let Law::Source(Expr::Param(n) | Expr::Input(n)) = &el.law
             && let Some(input) = g.inputs().get(n)

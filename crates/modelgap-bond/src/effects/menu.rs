@@ -7,9 +7,9 @@ use super::bond_effect::BondEffect;
 use super::def::EffectDef;
 use super::scales::Scales;
 use super::{
-    ActuatorGain, Brush, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault,
-    Heating, Inertia, Inflow, Leak, Load, Orifice, Overflow, Saturation, SensorDelay, SensorLag,
-    SensorOffset, SensorScale, Stiffness, Store, Viscous,
+    ActuatorGain, ActuatorLimit, Brush, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation,
+    Factor, Fault, Heating, Inertia, Inflow, Leak, Load, Orifice, Overflow, Saturation,
+    SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness, Store, Viscous,
 };
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
@@ -54,7 +54,9 @@ use crate::graph::{BondGraph, ElementId};
 /// - On each source whose value names an input, in any domain:
 ///   `deadzone@<source>` (the value `v` becomes `sign(v) max(|v| − δ, 0)`,
 ///   `δ` from 0 to the largest value the source imposed), and `gain@<source>`
-///   (the value becomes `k v`, `k` in [0.2, 2]).
+///   (the value becomes `k v`, `k` in [0.2, 2]) and `limit@<source>` (the
+///   value becomes `sign(v) min(|v|, v_max)`, `v_max` from a twentieth of the
+///   largest value the source imposed to that value, eight grid starts).
 /// - On each output: `lag@<output>` (a first-order lag `τ` in its sensor, from
 ///   a tenth of the sample interval to a fifth of the recording; one state),
 ///   `offset@<output>` (a constant `b` added to its reading, within ± the
@@ -143,6 +145,7 @@ pub fn offered(g: &BondGraph) -> Vec<BondEffect> {
     out.extend(on_nodes.into_iter().map(|(_, e)| e));
     out.extend(of::<DeadZone>(g));
     out.extend(of::<ActuatorGain>(g));
+    out.extend(of::<ActuatorLimit>(g));
     out.extend(of::<SensorLag>(g));
     out.extend(of::<SensorOffset>(g));
     out.extend(of::<SensorScale>(g));

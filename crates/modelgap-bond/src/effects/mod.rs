@@ -59,8 +59,9 @@
 //!   [`inflow`](Inflow), [`overflow`](Overflow), [`store`](Store) (a second
 //!   storage behind a resistance: a second thermal mass, a hydraulic
 //!   compliance), and on hydraulic ones [`orifice`](Orifice) (√Δp outflow);
-//! - on a source an input drives, in any domain: [`deadzone`](DeadZone) and
-//!   [`gain`](ActuatorGain) (the actuator delivers `k` times its command);
+//! - on a source an input drives, in any domain: [`deadzone`](DeadZone),
+//!   [`gain`](ActuatorGain) (the actuator delivers `k` times its command) and
+//!   [`limit`](ActuatorLimit) (it saturates at `±v_max`);
 //! - on every output: [`lag`](SensorLag) (a first-order lag in its sensor) and
 //!   [`offset`](SensorOffset) (a constant added to its reading) and
 //!   [`scale`](SensorScale) (its reading `k` times the value) and
@@ -100,6 +101,7 @@ mod junction;
 mod lag;
 mod law;
 mod leak;
+mod limit;
 mod load;
 mod menu;
 mod node;
@@ -144,6 +146,7 @@ pub use junction::{Junction, junction_domain};
 pub use lag::SensorLag;
 pub use law::{LawEffect, law_candidate};
 pub use leak::Leak;
+pub use limit::ActuatorLimit;
 pub use load::Load;
 pub(crate) use menu::place;
 pub use menu::{candidates, candidates_with, offered};

@@ -26,6 +26,7 @@ pub(super) enum Tag {
     Store,
     DeadZone,
     Gain,
+    Limit,
     Lag,
     Offset,
     Scale,
@@ -36,7 +37,7 @@ pub(super) enum Tag {
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 26] = [
+const PREFIXES: [(Tag, &str); 27] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -56,6 +57,7 @@ const PREFIXES: [(Tag, &str); 26] = [
     (Tag::Store, "store@"),
     (Tag::DeadZone, "deadzone@"),
     (Tag::Gain, "gain@"),
+    (Tag::Limit, "limit@"),
     (Tag::Lag, "lag@"),
     (Tag::Offset, "offset@"),
     (Tag::Scale, "scale@"),
@@ -121,7 +123,7 @@ mod tests {
     fn the_expected_prefixes_read_as_a_list() {
         assert_eq!(
             Tag::expected(),
-            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@, gain@, lag@, offset@, scale@, delay@, declared: or law@"
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@, gain@, limit@, lag@, offset@, scale@, delay@, declared: or law@"
         );
     }
 }
