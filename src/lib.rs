@@ -4,10 +4,10 @@
 //! It builds and diagnoses models of physical systems as **bond graphs** (elements,
 //! causality, equations in the notation of the literature, simulation, causal graphs, fault
 //! trees and temporal signatures), simulates **cloth** with the impulse-based method for
-//! inextensible cloth, reads and writes **measurements** as CSV or MCAP recordings, and runs
-//! the **measurement loop** on either kind of model: [`compare()`] where it fails,
-//! [`explain()`] which effect is missing (or that nothing is, or that the recording cannot
-//! be judged), [`Model::with_effects`] to add it.
+//! inextensible cloth, reads and writes **measurements** as CSV or MCAP recordings (and reads
+//! Parquet), and runs the **measurement loop** on either kind of model: [`compare()`] where
+//! it fails, [`explain()`] which effect is missing (or that nothing is, or that the recording
+//! cannot be judged), [`Model::with_effects`] to add it.
 //!
 //! This crate is the facade: it re-exports the workspace's crates under one name, loads a
 //! model of any kind by file or name ([`load`]), and ships the `modelgap` command-line tool.
@@ -100,7 +100,7 @@
 //!   parameters fitted before the loop.
 //! - [`story`], [`json`], [`report`]: the results as text, JSON and the HTML report with its
 //!   Foxglove MCAP.
-//! - [`Recording`], [`Signal`], [`io`]: signals on one time axis, CSV and MCAP
+//! - [`Recording`], [`Signal`], [`io`]: signals on one time axis, CSV and MCAP (Parquet read)
 //!   ([`io::read_recording_path`], [`io::write_recording_path`] choose by extension;
 //!   [`io::atomic`] writes every file atomically).
 //! - [`residual`]: residual statistics, the noise floor, thresholds, failure windows.

@@ -310,7 +310,7 @@ pub fn load_recording_with(
 fn check_recording_path(path: &Path) -> Result<()> {
     if path.is_dir() {
         return Err(Error::Input(format!(
-            "{} is a directory: give a recording file (.csv or .mcap)",
+            "{} is a directory: give a recording file (.csv, .mcap or .parquet)",
             path.display()
         )));
     }

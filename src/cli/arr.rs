@@ -15,7 +15,7 @@ pub struct ArrArgs {
     #[command(flatten)]
     model: ModelArgs,
 
-    /// A recording (CSV or MCAP) to evaluate the ARRs on: prints each ARR's RMS and largest value
+    /// A recording (CSV, MCAP or Parquet) to evaluate the ARRs on: prints each ARR's RMS and largest value
     #[arg(long, value_name = "FILE")]
     data: Option<std::path::PathBuf>,
 

@@ -186,7 +186,7 @@ pub fn run(command: &ClothCommand) -> anyhow::Result<()> {
 
 fn run_cmd(args: &RunArgs) -> anyhow::Result<()> {
     // Refuse an unknown extension before the simulation, not after it.
-    Format::from_path(&args.out)
+    Format::for_writing(&args.out)
         .with_context(|| format!("choosing the format of {}", args.out.display()))?;
     let mut scene = load_scene(&args.scene)?;
     if let Some(m) = args.method {

@@ -22,7 +22,7 @@ pub struct DiagnoseArgs {
     #[command(flatten)]
     model: ModelArgs,
 
-    /// The recording to diagnose (.csv or .mcap): the model's inputs and some of its outputs
+    /// The recording to diagnose (.csv, .mcap or .parquet): the model's inputs and some of its outputs
     #[arg(long, value_name = "FILE")]
     data: PathBuf,
 

@@ -21,7 +21,7 @@ pub struct FitArgs {
     #[command(flatten)]
     pub model: ModelArgs,
 
-    /// The recording (.csv or .mcap): the model's inputs and some of its outputs
+    /// The recording (.csv, .mcap or .parquet): the model's inputs and some of its outputs
     #[arg(long, value_name = "FILE")]
     pub data: PathBuf,
 

@@ -44,11 +44,13 @@ impl ModelArgs {
 }
 
 /// How a CSV recording is read: files as other tools export them (pandas, R, spreadsheets)
-/// mostly read as they are; these say what cannot be detected.
+/// mostly read as they are; these say what cannot be detected. `--time` also applies to
+/// Parquet recordings.
 #[derive(Debug, Default, Args)]
 pub struct CsvArgs {
-    /// CSV recordings: the time column, named as in the header, with or without its unit
-    /// (default: the column `t`, else the one named `t` or `time` in any case, with any unit)
+    /// CSV and Parquet recordings: the time column, named as in the header, with or without
+    /// its unit (default: the column `t`, else the one named `t` or `time` in any case, with
+    /// any unit)
     #[arg(long = "time", value_name = "COL")]
     pub time: Option<String>,
 
@@ -261,7 +263,7 @@ pub fn read_recording_arg_with(
 ) -> anyhow::Result<Recording> {
     if path.is_dir() {
         return Err(BadInput(format!(
-            "{option} {} is a directory: give a recording file (.csv or .mcap)",
+            "{option} {} is a directory: give a recording file (.csv, .mcap or .parquet)",
             path.display()
         ))
         .into());

@@ -38,7 +38,7 @@ pub struct LoopArgs {
     #[command(flatten)]
     pub model: ModelArgs,
 
-    /// The recording (.csv or .mcap): the model's inputs and some of its outputs
+    /// The recording (.csv, .mcap or .parquet): the model's inputs and some of its outputs
     #[arg(long, value_name = "FILE")]
     pub data: PathBuf,
 
@@ -238,7 +238,7 @@ pub fn load_loop(args: &LoopArgs) -> anyhow::Result<Loaded> {
     let path = &args.data;
     if path.is_dir() {
         return Err(BadInput(format!(
-            "--data {} is a directory: give a recording file (.csv or .mcap)",
+            "--data {} is a directory: give a recording file (.csv, .mcap or .parquet)",
             path.display()
         ))
         .into());

@@ -33,7 +33,7 @@ pub struct SimulateArgs {
     #[arg(long = "input", value_name = "NAME=DRIVE", value_parser = parse_input)]
     input: Vec<InputDrive>,
 
-    /// Drive every model input found in this recording (.csv or .mcap)
+    /// Drive every model input found in this recording (.csv, .mcap or .parquet)
     #[arg(long, value_name = "FILE")]
     inputs: Option<PathBuf>,
 
@@ -223,7 +223,7 @@ pub fn run(args: &SimulateArgs) -> anyhow::Result<()> {
             ))
             .into());
         }
-        Format::from_path(path)
+        Format::for_writing(path)
             .with_context(|| format!("choosing the format of --out {}", path.display()))?;
         check_out_dir("--out", path)?;
     }

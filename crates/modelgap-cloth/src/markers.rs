@@ -642,13 +642,26 @@ fn read_mcap_path(path: &Path, n_vertices: Option<usize>) -> Result<MarkerRecord
 ///
 /// # Errors
 ///
-/// [`ClothError::Core`] ([`CoreError::UnknownExtension`]) for another extension; otherwise
-/// as [`read_markers_csv_path`] or [`read_markers_mcap_path`].
+/// [`ClothError::Core`] ([`CoreError::UnknownExtension`]) for another extension, and
+/// ([`CoreError::FormatNotSupported`]) for Parquet, which holds signals; otherwise as
+/// [`read_markers_csv_path`] or [`read_markers_mcap_path`].
 pub fn read_markers_path(path: &Path) -> Result<MarkerRecording> {
     match modelgap_core::io::Format::from_path(path)? {
         modelgap_core::io::Format::Csv => read_markers_csv_path(path),
         modelgap_core::io::Format::Mcap => read_markers_mcap_path(path),
+        modelgap_core::io::Format::Parquet => Err(parquet_markers(path)),
     }
+}
+
+/// The refusal to read markers from Parquet, which modelgap reads for signals only.
+fn parquet_markers(path: &Path) -> ClothError {
+    CoreError::FormatNotSupported {
+        action: "read markers from",
+        format: "parquet",
+        reason: "parquet files are read as signals, markers as `t,id,x,y,z` csv or mcap",
+        path: Some(path.to_path_buf()),
+    }
+    .into()
 }
 
 /// Reads a marker recording of a mesh of `n_vertices` vertices from a `.csv` or `.mcap`
@@ -663,6 +676,7 @@ pub fn read_markers_path_within(path: &Path, n_vertices: usize) -> Result<Marker
     match modelgap_core::io::Format::from_path(path)? {
         modelgap_core::io::Format::Csv => read_csv_path(path, Some(n_vertices)),
         modelgap_core::io::Format::Mcap => read_mcap_path(path, Some(n_vertices)),
+        modelgap_core::io::Format::Parquet => Err(parquet_markers(path)),
     }
 }
 
@@ -670,12 +684,16 @@ pub fn read_markers_path_within(path: &Path, n_vertices: usize) -> Result<Marker
 ///
 /// # Errors
 ///
-/// [`ClothError::Core`] ([`CoreError::UnknownExtension`]) for another extension (nothing is
+/// [`ClothError::Core`] ([`CoreError::UnknownExtension`], or
+/// [`CoreError::FormatNotSupported`] for Parquet) for another extension (nothing is
 /// written); otherwise as [`write_markers_csv_path`] or [`write_markers_mcap_path`].
 pub fn write_markers_path(recording: &MarkerRecording, path: &Path) -> Result<()> {
     match modelgap_core::io::Format::from_path(path)? {
         modelgap_core::io::Format::Csv => write_markers_csv_path(recording, path),
         modelgap_core::io::Format::Mcap => write_markers_mcap_path(recording, path),
+        modelgap_core::io::Format::Parquet => {
+            Err(modelgap_core::io::parquet_read_only(path).into())
+        }
     }
 }
 

@@ -374,16 +374,17 @@ pub fn write_run_mcap<W: Write + Seek>(
 ///
 /// # Errors
 ///
-/// [`ClothError::Core`] for another extension (nothing is written) or when writing fails;
-/// [`ClothError::NoMarkerFrames`] for a run without recorded frames.
+/// [`ClothError::Core`] for another extension or Parquet (nothing is written) or when
+/// writing fails; [`ClothError::NoMarkerFrames`] for a run without recorded frames.
 pub fn write_run_path(run: &ClothRun, path: &Path) -> Result<()> {
-    let format = Format::from_path(path)?;
+    let format = Format::for_writing(path)?;
     let Some(markers) = &run.markers else {
         return Err(ClothError::NoMarkerFrames {
             path: Some(path.to_path_buf()),
         });
     };
     match format {
+        Format::Parquet => Err(modelgap_core::io::parquet_read_only(path).into()),
         Format::Csv => write_markers_csv_path(markers, path),
         Format::Mcap => {
             let file = AtomicFile::create(path)?;

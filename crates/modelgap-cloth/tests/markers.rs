@@ -101,6 +101,21 @@ fn path_functions_pick_the_format_and_name_the_file() {
         "{text}"
     );
     assert!(write_markers_path(&rec, &dir.join("m.txt")).is_err());
+    // Parquet holds signals (read only): markers are neither written nor read there.
+    let parquet = dir.join("m.parquet");
+    let e = write_markers_path(&rec, &parquet).unwrap_err();
+    assert!(
+        matches!(e, ClothError::Core(CoreError::FormatNotSupported { .. })),
+        "{e}"
+    );
+    assert!(!parquet.exists());
+    std::fs::write(&parquet, b"PAR1").unwrap();
+    let e = read_markers_path(&parquet).unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("cannot read markers from parquet"),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

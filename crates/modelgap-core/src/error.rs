@@ -1,7 +1,8 @@
 //! The error type of modelgap-core and its `Result` alias.
 //!
 //! Every variant carries the facts a user needs to fix the input: where the problem is (a
-//! [`Location`]: a CSV line, a sample index or an MCAP message index), which column or field,
+//! [`Location`]: a CSV line, a sample index, an MCAP message index or a Parquet row), which
+//! column or field,
 //! what was found, and, last in the message, the file when it is known.
 
 use std::fmt;
@@ -19,6 +20,9 @@ pub enum Location {
     Sample(usize),
     /// A message on the read topic of an MCAP file, counted from 0 in file order.
     Message(usize),
+    /// A row of a Parquet file, counted from 0 as pandas and Polars count (across row
+    /// groups).
+    Row(usize),
 }
 
 impl fmt::Display for Location {
@@ -27,6 +31,7 @@ impl fmt::Display for Location {
             Self::Line(line) => write!(f, "line {line}"),
             Self::Sample(index) => write!(f, "sample {index}"),
             Self::Message(index) => write!(f, "message {index}"),
+            Self::Row(index) => write!(f, "row {index}"),
         }
     }
 }
@@ -128,12 +133,12 @@ pub enum CoreError {
         path: Option<PathBuf>,
     },
 
-    /// The CSV header has no time column: none named `t` or `time`, or none of the name
-    /// asked for.
+    /// A CSV header or a Parquet file has no time column: none named `t` or `time`, or none
+    /// of the name asked for.
     #[error("{}{}", missing_time(*.line, .asked, .columns), in_path(.path))]
     MissingTimeColumn {
-        /// The header line, counted from 1.
-        line: usize,
+        /// The CSV header line, counted from 1; `None` for a Parquet file.
+        line: Option<usize>,
         /// The time column asked for by name, if one was.
         asked: Option<String>,
         /// The header's columns as written.
@@ -142,30 +147,32 @@ pub enum CoreError {
         path: Option<PathBuf>,
     },
 
-    /// Several CSV columns could be the time column.
+    /// Several columns (of a CSV header or a Parquet file) could be the time column.
     #[error(
-        "columns {} of the header at line {line} could each be time: choose one with the time \
-         option (`--time COL`){}",
+        "columns {}{} could each be time: choose one with the time option (`--time COL`){}",
         quoted(.columns),
+        of_header(*.line),
         in_path(.path)
     )]
     AmbiguousTimeColumn {
-        /// The header line, counted from 1.
-        line: usize,
+        /// The CSV header line, counted from 1; `None` for a Parquet file.
+        line: Option<usize>,
         /// The columns that could be time, as written.
         columns: Vec<String>,
         /// The file, when known.
         path: Option<PathBuf>,
     },
 
-    /// The CSV time column has a unit that is not a unit of time modelgap reads.
+    /// The time column has a unit that is not a unit of time modelgap reads.
     #[error(
-        "time column `{column}` at line {line} has unit `{unit}`: expected s, ms, us or ns{}",
+        "time column `{column}`{} has unit `{unit}`: expected s, ms, us or ns{}",
+        at_line(*.line),
         in_path(.path)
     )]
     TimeUnit {
-        /// The line that gives the unit (the header or the unit row), counted from 1.
-        line: usize,
+        /// The CSV line that gives the unit (the header or the unit row), counted from 1;
+        /// `None` for a Parquet column name.
+        line: Option<usize>,
         /// The time column as written.
         column: String,
         /// The unit found.
@@ -406,10 +413,84 @@ pub enum CoreError {
     },
 
     /// A file extension that names no supported format.
-    #[error("unknown file extension `{extension}`: expected `csv` or `mcap`{}", in_path(.path))]
+    #[error(
+        "unknown file extension `{extension}`: expected `csv`, `mcap` or `parquet` (`pq`){}",
+        in_path(.path)
+    )]
     UnknownExtension {
         /// The extension found (empty when the file has none).
         extension: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A known format used for what it does not hold: a recording written as Parquet (read
+    /// only), markers read from Parquet.
+    #[error(
+        "cannot {action} {format} ({reason}): expected a `csv` or `mcap` file{}",
+        in_path(.path)
+    )]
+    FormatNotSupported {
+        /// What was asked (`write a recording as`, `read markers from`).
+        action: &'static str,
+        /// The format (`parquet`).
+        format: &'static str,
+        /// Why not (`parquet is read, not written`).
+        reason: &'static str,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A Parquet file cannot be read: it is truncated or corrupt.
+    #[error("parquet data is truncated or corrupt: {reason}{}", in_path(.path))]
+    ParquetCorrupt {
+        /// The parquet crate's error text, or what does not add up.
+        reason: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A Parquet column is compressed with a codec modelgap does not read.
+    #[error(
+        "column `{column}` is compressed with {codec}: expected snappy (pandas' default), zstd \
+         (Polars') or none; write the file again with one of those{}",
+        in_path(.path)
+    )]
+    ParquetCodec {
+        /// The column as named in the file.
+        column: String,
+        /// The codec found (`GZIP`, `BROTLI`, …).
+        codec: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A Parquet column that is not the index holds something other than numbers,
+    /// timestamps or durations (text, booleans, lists).
+    #[error(
+        "column `{column}` holds {found}, not numbers: modelgap reads numbers, timestamps and \
+         durations; drop the column or convert it before writing the file{}",
+        in_path(.path)
+    )]
+    ColumnType {
+        /// The column as named in the file.
+        column: String,
+        /// What it holds (`text (BYTE_ARRAY, String)`).
+        found: String,
+        /// The file, when known.
+        path: Option<PathBuf>,
+    },
+
+    /// A value is missing (a Parquet null; pandas writes NaN as null).
+    #[error(
+        "missing value (null) at {at}, column `{column}`: every sample needs a value{}",
+        in_path(.path)
+    )]
+    MissingValue {
+        /// Where the value is missing.
+        at: Location,
+        /// The column as named in the file.
+        column: String,
         /// The file, when known.
         path: Option<PathBuf>,
     },
@@ -504,7 +585,12 @@ impl CoreError {
             | Self::McapUnexpectedField { path, .. }
             | Self::McapBadField { path, .. }
             | Self::McapTime { path, .. }
-            | Self::UnknownExtension { path, .. } => path.as_deref(),
+            | Self::UnknownExtension { path, .. }
+            | Self::FormatNotSupported { path, .. }
+            | Self::ParquetCorrupt { path, .. }
+            | Self::ParquetCodec { path, .. }
+            | Self::ColumnType { path, .. }
+            | Self::MissingValue { path, .. } => path.as_deref(),
             Self::UnknownSignal { .. }
             | Self::LengthMismatch { .. }
             | Self::InvalidArgument { .. }
@@ -540,7 +626,12 @@ impl CoreError {
             | Self::McapUnexpectedField { path, .. }
             | Self::McapBadField { path, .. }
             | Self::McapTime { path, .. }
-            | Self::UnknownExtension { path, .. } => Some(path),
+            | Self::UnknownExtension { path, .. }
+            | Self::FormatNotSupported { path, .. }
+            | Self::ParquetCorrupt { path, .. }
+            | Self::ParquetCodec { path, .. }
+            | Self::ColumnType { path, .. }
+            | Self::MissingValue { path, .. } => Some(path),
             Self::UnknownSignal { .. }
             | Self::LengthMismatch { .. }
             | Self::InvalidArgument { .. }
@@ -577,20 +668,34 @@ fn at_location(at: &Option<Location>) -> String {
 }
 
 /// The message of [`CoreError::MissingTimeColumn`], without the path.
-fn missing_time(line: usize, asked: &Option<String>, columns: &[String]) -> String {
+fn missing_time(line: Option<usize>, asked: &Option<String>, columns: &[String]) -> String {
+    let (header, its) = match line {
+        Some(line) => (format!("the header at line {line}"), "its"),
+        None => ("the file".to_owned(), "the file's"),
+    };
     match asked {
         Some(name) => format!(
-            "missing column `{name}`: the header at line {line} has no column `{name}` (with or \
-             without a unit); its columns are {}",
+            "missing column `{name}`: {header} has no column `{name}` (with or without a \
+             unit); {its} columns are {}",
             quoted(columns)
         ),
         None => format!(
-            "missing column `t`: the header at line {line} has no column `t` or `time` (with or \
-             without a unit); its columns are {}: choose the time column with the time option \
-             (`--time COL`)",
+            "missing column `t`: {header} has no column `t` or `time` (with or without a unit); \
+             {its} columns are {}: choose the time column with the time option (`--time COL`)",
             quoted(columns)
         ),
     }
+}
+
+/// ` of the header at line <line>` for a CSV header, nothing for a Parquet file.
+fn of_header(line: Option<usize>) -> String {
+    line.map(|l| format!(" of the header at line {l}"))
+        .unwrap_or_default()
+}
+
+/// ` at line <line>` when the line is known, nothing otherwise.
+fn at_line(line: Option<usize>) -> String {
+    line.map(|l| format!(" at line {l}")).unwrap_or_default()
 }
 
 /// Names as `` `a`, `b` ``, or `(none)`.

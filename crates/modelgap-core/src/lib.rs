@@ -1,4 +1,4 @@
-//! The domain-free core of modelgap: recordings, their CSV and MCAP files, the
+//! The domain-free core of modelgap: recordings, their CSV, MCAP and Parquet files, the
 //! statistics that hold a model's prediction against a measurement, and the
 //! measurement loop itself — [`compare()`] a [`Model`] with a recording,
 //! [`explain()`] which [`Candidate`] effect it is missing, and tell the story
@@ -7,7 +7,7 @@
 //! A [`Recording`] is a set of named signals on one strictly increasing time axis, checked
 //! when it is built or read (finite values, one value per sample, unique names). The
 //! [`io`] module reads and writes recordings as CSV text or MCAP files (JSON messages that
-//! Foxglove plots as is). The [`residual`] module measures how far a prediction is from a
+//! Foxglove plots as is), and reads Parquet files as pandas and Polars write them. The [`residual`] module measures how far a prediction is from a
 //! measurement: error statistics, the measurement's noise floor, thresholds, the windows
 //! where the residual leaves its band, and derivative estimates for temporal signatures.
 //! Both simulators of modelgap (bond graphs, cloth) build on these.
@@ -41,8 +41,9 @@
 //!   ("nothing is missing", one or two effects, or a partial explanation).
 //! - [`story`]: the loop's results as text and as the HTML report.
 //! - [`recording`]: [`Recording`] and [`Signal`].
-//! - [`io`]: [`io::csv`] and [`io::mcap`] readers and writers, and
-//!   [`io::read_recording_path`] / [`io::write_recording_path`], which choose by extension.
+//! - [`io`]: [`io::csv`] and [`io::mcap`] readers and writers, the [`io::parquet`] reader,
+//!   and [`io::read_recording_path`] / [`io::write_recording_path`], which choose by
+//!   extension.
 //! - [`residual`]: [`residual::stats`], [`residual::estimate_noise_sigma`],
 //!   [`residual::effective_sample_size`], [`residual::Threshold`],
 //!   [`residual::failure_windows`], [`residual::first_exceedance`],

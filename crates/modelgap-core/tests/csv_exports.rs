@@ -303,7 +303,7 @@ fn missing_time_column_lists_the_columns_and_how_to_choose() {
     );
     let e = refuse_with("t,u\n0,1\n", &CsvOptions::default().time("stamp"));
     assert!(
-        matches!(e, CoreError::MissingTimeColumn { line: 1, asked: Some(ref a), ref columns, .. }
+        matches!(e, CoreError::MissingTimeColumn { line: Some(1), asked: Some(ref a), ref columns, .. }
             if a == "stamp" && columns == &["t", "u"]),
         "{e}"
     );
@@ -314,7 +314,7 @@ fn missing_time_column_lists_the_columns_and_how_to_choose() {
 fn two_time_like_columns_are_refused_unless_one_is_t() {
     let e = refuse("time,T [s],u\n0,0,1\n");
     assert!(
-        matches!(e, CoreError::AmbiguousTimeColumn { line: 1, ref columns, .. }
+        matches!(e, CoreError::AmbiguousTimeColumn { line: Some(1), ref columns, .. }
             if columns == &["time", "T [s]"]),
         "{e}"
     );
@@ -327,7 +327,7 @@ fn two_time_like_columns_are_refused_unless_one_is_t() {
 fn unknown_time_unit_is_refused() {
     let e = refuse("time [min],u\n0,1\n");
     assert!(
-        matches!(e, CoreError::TimeUnit { line: 1, ref unit, .. } if unit == "min"),
+        matches!(e, CoreError::TimeUnit { line: Some(1), ref unit, .. } if unit == "min"),
         "{e}"
     );
 }

@@ -1,17 +1,20 @@
-//! Reading and writing recordings: CSV text and MCAP files.
+//! Reading and writing recordings: CSV text and MCAP files, and reading Parquet files.
 //!
 //! Each format has a pair of functions per direction: one that works on in-memory data
 //! (`read_signals`, `write_signals`) and one that opens the file and adds its path to errors
 //! (`read_signals_path`, `write_signals_path`). [`read_recording_path`] and
 //! [`write_recording_path`] pick the format from the file extension;
 //! [`read_recording_path_with`] also takes [`csv::CsvOptions`] for CSV files as other tools
-//! export them.
+//! export them (its time column also applies to Parquet files). Parquet is read only (see
+//! [`mod@parquet`]); what both table readers share about columns lives in `columns`.
 
 pub mod atomic;
+mod columns;
 pub mod csv;
 pub mod foxglove;
 pub mod json_schema;
 pub mod mcap;
+pub mod parquet;
 
 use std::path::Path;
 
@@ -25,6 +28,8 @@ pub enum Format {
     Csv,
     /// MCAP, extension `.mcap` (see [`mod@mcap`]).
     Mcap,
+    /// Parquet, extension `.parquet` or `.pq` (see [`mod@parquet`]); read only.
+    Parquet,
 }
 
 impl Format {
@@ -32,7 +37,8 @@ impl Format {
     ///
     /// # Errors
     ///
-    /// [`CoreError::UnknownExtension`] for any extension other than `csv` or `mcap`, or none.
+    /// [`CoreError::UnknownExtension`] for any extension other than `csv`, `mcap`, `parquet`
+    /// or `pq`, or none.
     pub fn from_path(path: &Path) -> Result<Self> {
         let extension = path
             .extension()
@@ -41,21 +47,47 @@ impl Format {
         match extension.to_ascii_lowercase().as_str() {
             "csv" => Ok(Self::Csv),
             "mcap" => Ok(Self::Mcap),
+            "parquet" | "pq" => Ok(Self::Parquet),
             _ => Err(CoreError::UnknownExtension {
                 extension,
                 path: Some(path.to_path_buf()),
             }),
         }
     }
+
+    /// The format a recording is written to at `path`: as [`Format::from_path`], Parquet
+    /// refused (it is read only). Check it before the work whose result is written.
+    ///
+    /// # Errors
+    ///
+    /// As [`Format::from_path`]; [`CoreError::FormatNotSupported`] for Parquet.
+    pub fn for_writing(path: &Path) -> Result<Self> {
+        match Self::from_path(path)? {
+            Self::Parquet => Err(parquet_read_only(path)),
+            format => Ok(format),
+        }
+    }
 }
 
-/// Reads a recording from a `.csv` file, or from the [`mcap::DEFAULT_SIGNAL_TOPIC`] topic of
-/// a `.mcap` file.
+/// The refusal to write a recording (or markers) as Parquet at `path`: modelgap reads
+/// Parquet files, it does not write them ([`CoreError::FormatNotSupported`]).
+pub fn parquet_read_only(path: &Path) -> CoreError {
+    CoreError::FormatNotSupported {
+        action: "write a recording as",
+        format: "parquet",
+        reason: "parquet files are read, not written",
+        path: Some(path.to_path_buf()),
+    }
+}
+
+/// Reads a recording from a `.csv` file, from the [`mcap::DEFAULT_SIGNAL_TOPIC`] topic of a
+/// `.mcap` file, or from a `.parquet` (`.pq`) file.
 ///
 /// # Errors
 ///
 /// [`CoreError::UnknownExtension`] for another extension; otherwise as
-/// [`csv::read_signals_path`] or [`mcap::read_signals_path`].
+/// [`csv::read_signals_path`], [`mcap::read_signals_path`] or
+/// [`parquet::read_signals_path`].
 ///
 /// # Example
 ///
@@ -69,17 +101,20 @@ pub fn read_recording_path(path: &Path) -> Result<Recording> {
     match Format::from_path(path)? {
         Format::Csv => csv::read_signals_path(path),
         Format::Mcap => mcap::read_signals_path(path, mcap::DEFAULT_SIGNAL_TOPIC),
+        Format::Parquet => parquet::read_signals_path(path),
     }
 }
 
 /// Reads a recording as [`read_recording_path`] does, a `.csv` file with `options` (see
-/// [`csv::read_signals_with`]); returns it with the reader's notes (an index column left out,
-/// a unit row read, a time unit converted, a separator or decimal mark detected).
+/// [`csv::read_signals_with`]) and a Parquet file with its time column; returns it with the
+/// reader's notes (an index column left out, a unit row read, a time unit converted, a
+/// separator or decimal mark detected).
 ///
 /// # Errors
 ///
 /// As [`read_recording_path`]; [`CoreError::InvalidArgument`] for options other than the
-/// defaults with an `.mcap` file, which has no columns to choose.
+/// defaults with an `.mcap` file, which has no columns to choose, and for a delimiter or a
+/// decimal mark with a Parquet file, whose columns are typed.
 pub fn read_recording_path_with(
     path: &Path,
     options: &csv::CsvOptions,
@@ -101,6 +136,20 @@ pub fn read_recording_path_with(
             mcap::read_signals_path(path, mcap::DEFAULT_SIGNAL_TOPIC)?,
             Vec::new(),
         )),
+        Format::Parquet if options.delimiter.is_some() || options.decimal_comma.is_some() => {
+            Err(CoreError::InvalidArgument {
+                name: "csv options",
+                reason: format!(
+                    "a delimiter or a decimal mark applies to CSV files; {} is Parquet, whose \
+                     columns hold typed numbers (the time column may be chosen)",
+                    path.display()
+                ),
+            })
+        }
+        Format::Parquet => {
+            let read = parquet::read_signals_path_with(path, options.time.as_deref())?;
+            Ok((read.recording, read.notes))
+        }
     }
 }
 
@@ -109,7 +158,8 @@ pub fn read_recording_path_with(
 ///
 /// # Errors
 ///
-/// [`CoreError::UnknownExtension`] for another extension (nothing is written); otherwise as
+/// [`CoreError::UnknownExtension`] for another extension and
+/// [`CoreError::FormatNotSupported`] for Parquet (nothing is written); otherwise as
 /// [`csv::write_signals_path`] or [`mcap::write_signals_path`].
 pub fn write_recording_path(path: &Path, recording: &Recording) -> Result<()> {
     match Format::from_path(path)? {
@@ -120,6 +170,7 @@ pub fn write_recording_path(path: &Path, recording: &Recording) -> Result<()> {
             mcap::DEFAULT_SIGNAL_TOPIC,
             mcap::McapCompression::default(),
         ),
+        Format::Parquet => Err(parquet_read_only(path)),
     }
 }
 
@@ -138,6 +189,28 @@ mod tests {
             Format::from_path(Path::new("b.mcap")).unwrap(),
             Format::Mcap
         );
+        for name in ["run.parquet", "run.PQ"] {
+            assert_eq!(Format::from_path(Path::new(name)).unwrap(), Format::Parquet);
+        }
+    }
+
+    #[test]
+    fn parquet_is_read_only_and_refuses_csv_layout_options() {
+        let rec = Recording::new(vec![0.0], vec![Signal::new("i", vec![0.1])]).unwrap();
+        let path = std::env::temp_dir().join(format!("modelgap-core-io-{}.pq", std::process::id()));
+        let e = write_recording_path(&path, &rec).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "cannot write a recording as parquet (parquet files are read, not written): \
+                 expected a `csv` or `mcap` file in {}",
+                path.display()
+            )
+        );
+        assert!(!path.exists());
+        let e = read_recording_path_with(&path, &csv::CsvOptions::default().delimiter(b';'))
+            .unwrap_err();
+        assert!(matches!(e, CoreError::InvalidArgument { .. }), "{e}");
     }
 
     #[test]
@@ -145,7 +218,7 @@ mod tests {
         let e = Format::from_path(Path::new("data.txt")).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "unknown file extension `txt`: expected `csv` or `mcap` in data.txt"
+            "unknown file extension `txt`: expected `csv`, `mcap` or `parquet` (`pq`) in data.txt"
         );
         let e = read_recording_path(Path::new("noext")).unwrap_err();
         assert!(

@@ -43,9 +43,10 @@ use std::path::Path;
 mod table;
 mod text;
 
-use table::{Table, split_unit};
+use table::Table;
 
 use crate::error::{CoreError, Result};
+use crate::io::columns::split_unit;
 use crate::recording::{Recording, TIME_NAME};
 
 /// How CSV text is read: the time column, the separator and the decimal mark, each
@@ -371,7 +372,7 @@ mod tests {
         let e = read("# c\nwhen,i\n0,1\n").unwrap_err();
         assert!(matches!(
             e,
-            CoreError::MissingTimeColumn { line: 2, asked: None, ref columns, .. }
+            CoreError::MissingTimeColumn { line: Some(2), asked: None, ref columns, .. }
                 if columns == &["when", "i"]
         ));
         assert_eq!(

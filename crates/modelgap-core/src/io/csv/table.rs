@@ -3,33 +3,15 @@
 
 use super::{CsvOptions, CsvRecording};
 use crate::error::{CoreError, Location, Result};
-use crate::recording::{MAX_MAGNITUDE, Recording, Signal, TIME_NAME, check_name};
+use crate::io::columns::{
+    check_magnitude, check_signal_names, find_time, is_index_name, next_row_number, per_second,
+    row_index_note, split_unit,
+};
+use crate::recording::{Recording, Signal};
 
 /// Why an unnamed first column is refused when its values are not a row index.
 const UNNAMED_INDEX: &str = "an unnamed first column is read as a row index, and left out, \
                              only when its values are consecutive whole numbers";
-
-/// A header cell split into a name and a unit: `u [V]`, `u[V]` and `u (V)` give `u` and `V`.
-pub(super) fn split_unit(cell: &str) -> (&str, Option<&str>) {
-    for (open, close, needs_space) in [('[', ']', false), ('(', ')', true)] {
-        if let Some(body) = cell.strip_suffix(close)
-            && let Some(at) = body.rfind(open)
-        {
-            let before = &body[..at];
-            let name = before.trim_end();
-            let unit = body[at + 1..].trim();
-            let spaced = before.len() > name.len();
-            if !name.is_empty()
-                && !unit.is_empty()
-                && !unit.contains(open)
-                && (spaced || !needs_space)
-            {
-                return (name, Some(unit));
-            }
-        }
-    }
-    (cell, None)
-}
 
 /// A unit as a unit row writes it: `V`, `[V]` or `(V)`; `None` for an empty cell.
 fn unit_cell(cell: &str) -> Option<String> {
@@ -40,22 +22,6 @@ fn unit_cell(cell: &str) -> Option<String> {
         .unwrap_or(cell)
         .trim();
     (!unit.is_empty()).then(|| unit.to_owned())
-}
-
-/// How many of a time unit make a second, for the units the reader converts.
-fn per_second(unit: &str) -> Option<f64> {
-    match unit {
-        "s" | "sec" => Some(1.0),
-        "ms" => Some(1e3),
-        "us" | "\u{b5}s" | "\u{3bc}s" => Some(1e6),
-        "ns" => Some(1e9),
-        _ => None,
-    }
-}
-
-/// True for a header cell that names a row index: empty, `index` or `Unnamed: 0`.
-fn is_index_name(cell: &str) -> bool {
-    cell.is_empty() || cell.eq_ignore_ascii_case("index") || cell == "Unnamed: 0"
 }
 
 /// The decimal mark of a file's numbers.
@@ -110,7 +76,7 @@ impl Table {
         options: &CsvOptions,
         delimiter: u8,
     ) -> Result<Table> {
-        let time = find_time(cells, line, options.time.as_deref())?;
+        let time = find_time(cells, Some(line), options.time.as_deref())?;
         let (names, units): (Vec<String>, Vec<Option<String>>) = cells
             .iter()
             .map(|c| {
@@ -125,32 +91,15 @@ impl Table {
                 last: None,
                 error: None,
             });
-        let at = Some(Location::Line(line));
-        for (i, name) in names.iter().enumerate() {
-            if i == time || (i == 0 && index.is_some() && name.is_empty()) {
-                continue;
-            }
-            check_name(name).map_err(|e| match e {
-                CoreError::InvalidSignalName { name, reason, .. } => CoreError::InvalidSignalName {
-                    name,
-                    reason,
-                    at,
-                    path: None,
-                },
-                other => other,
-            })?;
-            if names[..i]
+        // The time column is no signal, nor an unnamed first column that may be a row index.
+        check_signal_names(
+            names
                 .iter()
                 .enumerate()
-                .any(|(j, n)| j != time && n == name)
-            {
-                return Err(CoreError::DuplicateSignal {
-                    name: name.clone(),
-                    at,
-                    path: None,
-                });
-            }
-        }
+                .filter(|&(i, name)| i != time && !(i == 0 && index.is_some() && name.is_empty()))
+                .map(|(_, name)| name.as_str()),
+            Some(Location::Line(line)),
+        )?;
         let decimal = match (options.decimal_comma, delimiter) {
             (Some(true), _) => Decimal::Comma,
             (Some(false), _) => Decimal::Point {
@@ -184,7 +133,7 @@ impl Table {
     fn set_time_unit(&mut self, line: usize) -> Result<()> {
         if let Some(unit) = &self.units[self.time] {
             self.time_per_second = per_second(unit).ok_or_else(|| CoreError::TimeUnit {
-                line,
+                line: Some(line),
                 column: self.cells[self.time].clone(),
                 unit: unit.clone(),
                 path: None,
@@ -226,7 +175,7 @@ impl Table {
                 path: None,
             });
         }
-        check_magnitude(t, t, column, line)?;
+        check_magnitude(t, t, column, Location::Line(line))?;
         if let Some(&t_prev) = self.t.last()
             && t <= t_prev
         {
@@ -294,7 +243,7 @@ impl Table {
                 path: None,
             });
         }
-        check_magnitude(value, t, column, line)?;
+        check_magnitude(value, t, column, Location::Line(line))?;
         Ok(value)
     }
 
@@ -354,14 +303,9 @@ impl Table {
         if let Some(index) = self.index.take()
             && index.broken_at.is_none()
         {
-            let which = if self.names[0].is_empty() {
-                " (unnamed)".to_owned()
-            } else {
-                format!(" `{}`", self.cells[0])
-            };
-            self.notes.push(format!(
-                "the first column{which} holds the row numbers {} to {}: read as a row index \
-                 and left out",
+            let column = (!self.names[0].is_empty()).then_some(self.cells[0].as_str());
+            self.notes.push(row_index_note(
+                column,
                 index.first.unwrap_or_default(),
                 index.last.unwrap_or_default(),
             ));
@@ -430,68 +374,12 @@ impl IndexColumn {
         if self.broken_at.is_some() {
             return;
         }
-        // Whole numbers beyond 2^53 no longer step by one in f64.
-        const LARGEST: f64 = 9_007_199_254_740_992.0;
         match cell.parse::<f64>() {
-            Ok(v)
-                if v.fract() == 0.0
-                    && v.abs() < LARGEST
-                    && self.last.is_none_or(|last| v == last + 1.0) =>
-            {
+            Ok(v) if next_row_number(self.last, v) => {
                 self.first.get_or_insert(v);
                 self.last = Some(v);
             }
             _ => self.broken_at = Some(line),
         }
     }
-}
-
-/// The time column: the asked one, else the first column `t`, else the one column named `t`
-/// or `time` (any case, any unit).
-fn find_time(cells: &[&str], line: usize, asked: Option<&str>) -> Result<usize> {
-    let matching: Vec<usize> = match asked {
-        Some(name) => (0..cells.len())
-            .filter(|&i| cells[i] == name || split_unit(cells[i]).0 == name)
-            .collect(),
-        None => {
-            if let Some(i) = cells.iter().position(|c| *c == TIME_NAME) {
-                return Ok(i);
-            }
-            (0..cells.len())
-                .filter(|&i| {
-                    let name = split_unit(cells[i]).0;
-                    name.eq_ignore_ascii_case(TIME_NAME) || name.eq_ignore_ascii_case("time")
-                })
-                .collect()
-        }
-    };
-    match matching[..] {
-        [i] => Ok(i),
-        [] => Err(CoreError::MissingTimeColumn {
-            line,
-            asked: asked.map(str::to_owned),
-            columns: cells.iter().map(|c| (*c).to_owned()).collect(),
-            path: None,
-        }),
-        _ => Err(CoreError::AmbiguousTimeColumn {
-            line,
-            columns: matching.iter().map(|&i| cells[i].to_owned()).collect(),
-            path: None,
-        }),
-    }
-}
-
-/// Refuses a value beyond [`MAX_MAGNITUDE`]; `t` is the sample's time.
-fn check_magnitude(value: f64, t: f64, column: &str, line: usize) -> Result<()> {
-    if value.abs() > MAX_MAGNITUDE {
-        return Err(CoreError::OutOfRange {
-            at: Location::Line(line),
-            t,
-            column: column.to_owned(),
-            value,
-            limit: MAX_MAGNITUDE,
-            path: None,
-        });
-    }
-    Ok(())
 }
