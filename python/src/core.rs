@@ -97,14 +97,18 @@ impl PyRecording {
         Self::new(t, values, names)
     }
 
-    /// Reads a ``.csv`` file, or the ``/signals`` topic of an ``.mcap`` file.
+    /// Reads a ``.csv`` file, the ``/signals`` topic of an ``.mcap`` file, or a ``.parquet``
+    /// (``.pq``) file.
     ///
     /// CSV files as pandas, R or a spreadsheet export them read as they are: quoted cells, a
     /// row-index first column (left out), the time column ``t`` or ``time`` anywhere (with a
     /// unit such as ``time [ms]``, converted to seconds), ``;`` or tabs with decimal commas,
-    /// ``name [unit]`` headers or a unit row. ``time`` names another time column,
-    /// ``delimiter`` (one character) and ``decimal_comma`` declare what detection cannot
-    /// tell; none of them applies to an ``.mcap`` file.
+    /// ``name [unit]`` headers or a unit row. Parquet files as pandas (``to_parquet()``) and
+    /// Polars (``write_parquet()``) write them read with the same column rules (the pandas
+    /// index left out, timestamps in seconds from the first sample); nulls and text columns
+    /// are refused with the column and row. ``time`` names another time column (CSV and
+    /// Parquet), ``delimiter`` (one character) and ``decimal_comma`` declare what detection
+    /// cannot tell in CSV; none of them applies to an ``.mcap`` file.
     #[staticmethod]
     #[pyo3(signature = (path, *, time = None, delimiter = None, decimal_comma = None))]
     fn load(
@@ -134,7 +138,8 @@ impl PyRecording {
         Ok(read.map_err(to_py_err)?.0.into())
     }
 
-    /// Writes the recording as ``.csv`` or ``.mcap`` (chosen by the extension).
+    /// Writes the recording as ``.csv`` or ``.mcap`` (chosen by the extension); Parquet is
+    /// read, not written.
     fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
         let rec = &self.inner;
         detached(py, move || modelgap::io::write_recording_path(&path, rec))?.map_err(to_py_err)

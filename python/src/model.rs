@@ -595,8 +595,8 @@ fn load_model(
     }
 }
 
-/// Reads a recording for ``model``: a signals file (``.csv``, ``.mcap``) for a bond-graph
-/// model or a model written in Python, a marker file (``t,id,x,y,z`` CSV or ``/markers``
+/// Reads a recording for ``model``: a signals file (``.csv``, ``.mcap``, ``.parquet``) for a
+/// bond-graph model or a model written in Python, a marker file (``t,id,x,y,z`` CSV or ``/markers``
 /// MCAP, every id checked against the grid) for a ``ClothModel``.
 #[pyfunction]
 fn load_recording(

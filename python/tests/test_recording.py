@@ -1,4 +1,4 @@
-"""Recordings from Python: numpy in and out, CSV and MCAP files, errors."""
+"""Recordings from Python: numpy in and out, CSV and MCAP files (and Parquet, read), errors."""
 
 from __future__ import annotations
 
@@ -112,6 +112,38 @@ def test_exports_of_other_tools_load_and_time_names_the_column(tmp_path: Path):
     np.testing.assert_array_equal(rec.t, [0.0, 0.001])
     with pytest.raises(DataError, match="delimiter must be one character"):
         Recording.load(sheet, delimiter=";;")
+
+
+PARQUET = Path(__file__).resolve().parents[2] / "crates/modelgap-core/tests/data/parquet"
+MOTOR_CSV = Path(__file__).resolve().parents[2] / "examples/data/motor_hidden_effect.csv"
+
+
+def test_parquet_exports_load_as_the_csv_rows(tmp_path: Path):
+    # Issue 16: the committed files pandas (`to_parquet()`) and Polars (`write_parquet()`)
+    # wrote from the first 250 samples of the motor recording read as the CSV's samples.
+    t, values, names = Recording.load(MOTOR_CSV).to_numpy()
+    for name in ["pandas_default.parquet", "polars_default.parquet", "row_groups.parquet"]:
+        rec = Recording.load(PARQUET / name)
+        assert rec.names == names, name
+        t2, v2, _ = rec.to_numpy()
+        np.testing.assert_array_equal(t2, t[:250])
+        np.testing.assert_array_equal(v2, values[:250])
+    rec = Recording.load(PARQUET / "stamp_ms.parquet", time="stamp")
+    np.testing.assert_allclose(rec.t, t[:250], rtol=0.0, atol=1e-12)
+    with pytest.raises(
+        DataError, match=r"missing value \(null\) at row 7, column `i`.*null_value\.parquet"
+    ):
+        Recording.load(PARQUET / "null_value.parquet")
+    with pytest.raises(DataError, match=r"column `mode` holds text.*string_column\.parquet"):
+        Recording.load(PARQUET / "string_column.parquet")
+    with pytest.raises(DataError, match=r"truncated or corrupt.*truncated\.parquet"):
+        Recording.load(PARQUET / "truncated.parquet")
+    with pytest.raises(DataError, match="applies to CSV files"):
+        Recording.load(PARQUET / "polars_default.parquet", delimiter=";")
+    out = tmp_path / "out.parquet"
+    with pytest.raises(DataError, match="cannot write a recording as parquet"):
+        rec.save(out)
+    assert not out.exists()
 
 
 def test_pickle_round_trip(signals):

@@ -147,7 +147,8 @@ class Recording:
         delimiter: Optional[str] = None,
         decimal_comma: Optional[bool] = None,
     ) -> Recording:
-        """Reads a recording from a ``.csv`` file or the ``/signals`` topic of an ``.mcap`` file.
+        """Reads a recording from a ``.csv`` file, the ``/signals`` topic of an ``.mcap`` file,
+        or a ``.parquet`` (``.pq``) file.
 
         A CSV file has a header naming the columns and one row per sample; lines starting with
         ``#`` are comments. Files as pandas, R or a spreadsheet export them read as they are:
@@ -155,12 +156,20 @@ class Recording:
         left out; the time column is ``t``, else the one named ``t`` or ``time`` in any case,
         anywhere in the header, with or without a unit (``time [ms]`` is converted to
         seconds); ``;`` or tabs between cells are detected, and with them decimal commas
-        (``1,5``); ``name [unit]`` headers and a unit row under the header give units. The GIL
-        is released while reading.
+        (``1,5``); ``name [unit]`` headers and a unit row under the header give units.
+
+        A Parquet file reads as pandas (``df.to_parquet()``, Snappy) and Polars
+        (``df.write_parquet()``, zstd) write it, over any number of row groups: its columns
+        mean what CSV columns do (time found by name, ``name [unit]``, the pandas index left
+        out); numbers of any width, timestamps (seconds from the first sample) and pandas'
+        timedeltas (seconds) are read; nulls, NaN, text columns and other codecs are refused,
+        naming the column and the row (counted from 0). The GIL is released while reading.
 
         Args:
-            path: The file; its extension (``.csv`` or ``.mcap``) chooses the format.
-            time: CSV: the time column, named as in the header, with or without its unit.
+            path: The file; its extension (``.csv``, ``.mcap``, ``.parquet`` or ``.pq``)
+                chooses the format.
+            time: CSV and Parquet: the time column, named as in the header, with or without
+                its unit.
             delimiter: CSV: the one character between cells (``";"``, ``"\\t"``) instead of
                 detecting it.
             decimal_comma: CSV: whether numbers are written ``1,5``; needed for quoted
@@ -170,23 +179,25 @@ class Recording:
             The recording.
 
         Raises:
-            DataError: For a file that cannot be read, an unknown extension, bad content
-                (naming the line and column, or the MCAP message), a time column that is
-                missing (the message lists the columns) or ambiguous, or CSV options with an
-                ``.mcap`` file.
+            DataError: For a file that cannot be read (truncated or corrupt), an unknown
+                extension, bad content (naming the line and column, the MCAP message, or the
+                Parquet row and column), a time column that is missing (the message lists the
+                columns) or ambiguous, or CSV options with an ``.mcap`` or ``.parquet`` file
+                (``time`` excepted for Parquet).
         """
 
     def save(self, path: _Path) -> None:
         """Writes the recording as ``.csv`` or (zstd) ``.mcap``, chosen by the extension.
 
         CSV values are written so that reading them back gives an identical recording. The
-        GIL is released while writing.
+        GIL is released while writing. Parquet is read, not written.
 
         Args:
             path: The file to write.
 
         Raises:
-            DataError: For an unknown extension (nothing is written) or a write that fails.
+            DataError: For an unknown extension or ``.parquet`` (nothing is written) or a
+                write that fails.
         """
 
     def to_numpy(self) -> tuple[_F64, _F64, list[str]]:
@@ -869,10 +880,10 @@ def load_model(
 def load_recording(path: _Path, model: _Model) -> Recording:
     """Reads a recording the way ``model`` takes it.
 
-    A signals file (``.csv``, ``.mcap``) for a bond-graph model or a model written in Python;
-    a marker file (``t,id,x,y,z`` CSV or ``/markers`` MCAP, every id checked against the
-    grid) for a ``ClothModel``, turned into signals ``m{id}.x|y|z`` (m). The GIL is released
-    while reading.
+    A signals file (``.csv``, ``.mcap``, ``.parquet``) for a bond-graph model or a model
+    written in Python; a marker file (``t,id,x,y,z`` CSV or ``/markers`` MCAP, every id
+    checked against the grid) for a ``ClothModel``, turned into signals ``m{id}.x|y|z`` (m).
+    The GIL is released while reading.
 
     Args:
         path: The file.
