@@ -56,8 +56,12 @@ pub const ATOL: f64 = 1e-10;
 /// take that step.
 pub const FIXED_STEP_TOLERANCE: f64 = 1e-4;
 
-/// Substeps per sample interval [`Model::for_fitting`] tries, in order.
-const FIXED_SUBSTEPS: [u32; 7] = [1, 2, 4, 8, 16, 32, 64];
+/// Fixed steps [`Model::for_fitting`] tries, in sample intervals, longest first (a step
+/// never crosses a breakpoint of the inputs, so a recording whose inputs move at every
+/// sample takes at least one step per sample whatever this says).
+const FIXED_STEPS: [f64; 11] = [
+    16.0, 8.0, 4.0, 2.0, 1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125, 0.015625,
+];
 
 /// Newton iterations of the steady start before giving up.
 const STEADY_MAX_ITERATIONS: usize = 100;
@@ -140,6 +144,12 @@ impl BondModel {
     /// How the recording's inputs are held between samples.
     pub fn hold(&self) -> Hold {
         self.hold
+    }
+
+    /// The fixed integration step (s) of a copy made for fitting
+    /// ([`Model::for_fitting`]); `None` for adaptive steps.
+    pub fn fixed_step(&self) -> Option<f64> {
+        self.fixed_step
     }
 
     /// How runs start: at rest or at the steady state under the first inputs.
@@ -410,17 +420,13 @@ impl Model for BondModel {
         self.graph.inputs().keys().cloned().collect()
     }
 
-    /// `1 / |λ|` of every mode of the model linearised where predictions
-    /// start (at rest, or at the steady state), under the recording's first
-    /// inputs; pure integrators (λ = 0) and modes the linearisation cannot
-    /// evaluate are left out.
     /// A fixed-step copy of the model for fits on `rec` (RODAS4 with no error
-    /// control, [`SimOptions::fixed_step`]): `h = Δt / s` for the first `s` of
-    /// 1, 2, 4, … 64 substeps per sample interval at which the model as given
-    /// (its nonlinear laws, or its linear ones on the same fixed-step path)
-    /// stays within [`FIXED_STEP_TOLERANCE`] of its reference run (the exact
+    /// control, [`SimOptions::fixed_step`]): the longest step of 16, 8, … 1/64
+    /// sample intervals ([`FIXED_STEPS`]) at which the model as given (its
+    /// nonlinear laws, or its linear ones on the same fixed-step path) stays
+    /// within [`FIXED_STEP_TOLERANCE`] of its reference run (the exact
     /// discretisation, or adaptive steps at [`RTOL`]) on every output,
-    /// relative to that output's spread. `None` when no grid is good enough or
+    /// relative to that output's spread. `None` when no step is good enough or
     /// the recording is too short to judge.
     fn for_fitting(&self, rec: &Recording) -> Option<Box<dyn Model>> {
         if self.fixed_step.is_some() || rec.len() < 3 {
@@ -445,8 +451,8 @@ impl Model for BondModel {
             Start::Rest => None,
             Start::SteadyState => Some(steady_start(&self.graph, &model, rec, None).ok()?),
         };
-        for substeps in FIXED_SUBSTEPS {
-            let h = dt / f64::from(substeps);
+        for steps in FIXED_STEPS {
+            let h = dt * steps;
             let opts = SimOptions {
                 solver: Solver::Rosenbrock,
                 fixed_step: Some(h),
@@ -475,6 +481,10 @@ impl Model for BondModel {
         None
     }
 
+    /// `1 / |λ|` of every mode of the model linearised where predictions
+    /// start (at rest, or at the steady state), under the recording's first
+    /// inputs; pure integrators (λ = 0) and modes the linearisation cannot
+    /// evaluate are left out.
     fn time_constants(&self, rec: &Recording) -> Vec<f64> {
         let Ok(model) = CompiledModel::new(&self.graph) else {
             return Vec::new();
