@@ -43,7 +43,9 @@ const Q_DECADES: [f64; 7] = [-1.0, 0.5, 2.0, 3.5, 5.0, 6.5, 8.0];
 /// random walk's intensity again.
 const NOISE_ROUNDS: usize = 2;
 /// Measurement-noise levels tried per output, in decades of the floor given.
-const R_DECADES: [f64; 9] = [-3.0, -2.5, -2.0, -1.5, -1.0, -0.5, 0.0, 0.5, 1.0];
+const R_DECADES: [f64; 13] = [
+    -3.0, -2.5, -2.0, -1.5, -1.0, -0.5, 0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0,
+];
 
 /// A place an unknown effort or flow may act.
 #[derive(Clone, Debug)]
@@ -207,7 +209,7 @@ pub fn missing_signals(
 /// `model` (with `effects` applied) finds likeliest on `rec` when a free
 /// effort or flow acts at its place that explains most: the smoother of
 /// [`missing_signals`] with each output's noise level chosen by likelihood
-/// too (from a thousandth to ten times `sigma`). What a model lacking nothing
+/// too (from a thousandth to a thousand times `sigma`). What a model lacking nothing
 /// but that effort would still leave: a noise floor that the signal's own fast
 /// content does not inflate. Outputs the recording lacks are left out; empty
 /// when no place can be estimated.
