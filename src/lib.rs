@@ -114,7 +114,7 @@ pub use modelgap_core::{
     Calibration, CalibrationOptions, Candidate, CompareOptions, Comparison, CoreError, Effect,
     EffectKind, EffectParam, ExplainOptions, Explanation, Location, Model, OutputComparison,
     Prediction, Prior, RankedCandidate, Recording, Signal, Verdict, calibrate, compare, explain,
-    fit, io, json, judge, math, noise, report, residual, story,
+    fit, io, json, judge, math, noise, report, residual, story, timing,
 };
 
 pub use modelgap_bond::BondError;

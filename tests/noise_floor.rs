@@ -132,12 +132,24 @@ state = "spring"
 unit = "m"
 "#;
 
-#[test]
-fn a_right_model_of_an_oversampled_resonance_is_not_called_complete() {
-    let g = read_model(OSCILLATOR).unwrap();
+/// The oscillator driven by a white random force (every frequency excited: no quiet band),
+/// its position measured with white noise of 1e-5 m; `hidden` is a law added at the body
+/// (none for the right model).
+fn oversampled(hidden: Option<&str>, seed: u64) -> Recording {
+    let mut g = read_model(OSCILLATOR).unwrap();
+    if let Some(law) = hidden {
+        g = read_model(&OSCILLATOR.replace(
+            "[[bonds]]\nfrom = \"force\"",
+            &format!(
+                "[[elements]]\nname = \"extra\"\nkind = \"R\"\neffort = \"{law}\"\n\
+                 [[bonds]]\nfrom = \"body\"\nto = \"extra\"\n[[bonds]]\nfrom = \"force\""
+            ),
+        ))
+        .unwrap();
+    }
     let n = 3000;
     let t: Vec<f64> = (0..n).map(|k| k as f64 / 60.0).collect();
-    let mut gauss = Gaussian::new(11);
+    let mut gauss = Gaussian::new(seed);
     let u: Vec<f64> = (0..n).map(|_| 20.0 * gauss.sample()).collect();
     let inputs = Inputs::new().with(
         "u",
@@ -151,23 +163,55 @@ fn a_right_model_of_an_oversampled_resonance_is_not_called_complete() {
     let x: Vec<f64> = (run.output("x").unwrap().iter())
         .map(|v| v + 1e-5 * gauss.sample())
         .collect();
-    let floor = noise_floor("x", &x, &BTreeMap::new());
+    Recording::new(t, vec![Signal::new("u", u), Signal::new("x", x)]).unwrap()
+}
+
+#[test]
+fn a_right_model_of_an_oversampled_resonance_is_judged_against_the_smoothers_floor() {
+    let model = BondModel::new(read_model(OSCILLATOR).unwrap());
+    let rec = oversampled(None, 11);
+    let x = &rec.signal("x").unwrap().values;
+    // The third differences read the resonance, not the noise; and the white force leaves no
+    // quiet band to read it in.
+    let floor = noise_floor("x", x, &BTreeMap::new());
     assert_eq!(floor.kind, FloorKind::SignalContent, "{floor:?}");
     assert!(floor.sigma > 10.0 * 1e-5, "{floor:?}");
-    let rec = Recording::new(t, vec![Signal::new("u", u), Signal::new("x", x)]).unwrap();
-    let model = BondModel::new(g);
+    let u = &rec.signal("u").unwrap().values;
+    assert_eq!(modelgap::residual::quiet_band_noise(x, &[u]), None);
+    // explain takes the floor from what the model leaves beside a free force at the body:
+    // the sensor's 1e-5 m, and the right model lacks nothing.
     let ex = explain(&model, &rec, &ExplainOptions::default()).unwrap();
-    assert_ne!(ex.verdict, Verdict::NothingMissing, "{:?}", ex.reasons);
+    let out = &ex.outputs[0];
+    assert_eq!(out.noise_method, FloorKind::Smoother, "{:?}", ex.warnings);
     assert!(
-        ex.warnings.iter().any(|w| w.contains("too high")),
-        "{:?}",
-        ex.warnings
+        (0.8e-5..1.25e-5).contains(&out.noise_floor),
+        "floor {} (true noise 1e-5)",
+        out.noise_floor
     );
-    // With the sensor's noise given, the right model is judged at its floor.
+    assert_eq!(ex.verdict, Verdict::NothingMissing, "{:?}", ex.reasons);
+    // With the sensor's noise given, the same.
     let opts = ExplainOptions {
         noise: BTreeMap::from([("x".to_string(), 1e-5)]),
         ..ExplainOptions::default()
     };
     let ex = explain(&model, &rec, &opts).unwrap();
     assert_eq!(ex.verdict, Verdict::NothingMissing, "{:?}", ex.reasons);
+}
+
+/// The smoother's floor does not swallow what the model lacks: a quadratic damper the
+/// model does not have (its force a few percent of the spring's) is found, not judged noise.
+#[test]
+fn a_wrong_model_of_an_oversampled_resonance_is_not_excused_by_the_smoothers_floor() {
+    let model = BondModel::new(read_model(OSCILLATOR).unwrap());
+    let rec = oversampled(Some("0.05 * f * abs(f)"), 12);
+    let ex = explain(&model, &rec, &ExplainOptions::default()).unwrap();
+    let out = &ex.outputs[0];
+    assert_ne!(ex.verdict, Verdict::NothingMissing, "{:?}", ex.reasons);
+    assert!(
+        out.noise_floor < 2e-5,
+        "floor {} ({:?})",
+        out.noise_floor,
+        out.noise_method
+    );
+    assert!(out.rms_before > 5.0 * out.noise_floor, "{out:?}");
 }

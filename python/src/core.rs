@@ -675,6 +675,15 @@ impl PyOutputSummary {
     fn noise_floor(&self) -> f64 {
         self.inner.noise_floor
     }
+    /// How the noise floor was found: as ``Output.noise_method``, or ``"smoother"`` (the white
+    /// noise the model leaves with a free effort at the place that explains most).
+    #[getter]
+    fn noise_method(&self) -> String {
+        serde_json::to_value(self.inner.noise_method)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_owned))
+            .unwrap_or_default()
+    }
     /// RMS of the model as given.
     #[getter]
     fn rms_before(&self) -> f64 {

@@ -355,14 +355,16 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         .build()
         .with_context(|| format!("starting a pool of {threads} threads"))?;
     let start = Instant::now();
-    let cpu_start = cpu_seconds();
+    let cpu_start = modelgap::timing::cpu_seconds();
     let run = pool
         .install(|| run_scene(&scene, &options))
         .map_err(|e| run_error(e, &scene.name))
         .with_context(|| format!("running scene {}", scene.name))?;
     super::interrupt::check("the bench's report not printed")?;
     let wall_s = start.elapsed().as_secs_f64();
-    let cpu_s = cpu_start.zip(cpu_seconds()).map(|(a, b)| b - a);
+    let cpu_s = cpu_start
+        .zip(modelgap::timing::cpu_seconds())
+        .map(|(a, b)| b - a);
     let st = run.stats;
     let per_step = |t: f64| 1e3 * t / st.steps.max(1) as f64;
     let report = BenchReport {
@@ -459,22 +461,6 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         );
     }
     super::print(&s)
-}
-
-/// CPU time used so far by this process, every thread, user and system (s); `None` where
-/// the platform does not say.
-#[cfg(unix)]
-fn cpu_seconds() -> Option<f64> {
-    use nix::sys::resource::{UsageWho, getrusage};
-    let usage = getrusage(UsageWho::RUSAGE_SELF).ok()?;
-    let secs = |t: nix::sys::time::TimeVal| t.tv_sec() as f64 + t.tv_usec() as f64 * 1e-6;
-    Some(secs(usage.user_time()) + secs(usage.system_time()))
-}
-
-/// CPU time used so far by this process: not measured on this platform.
-#[cfg(not(unix))]
-fn cpu_seconds() -> Option<f64> {
-    None
 }
 
 /// A scene from a file (a path that exists, or ends in `.toml`) or a built-in name.

@@ -39,6 +39,13 @@ use crate::simulate::{Drive, Inputs};
 const UNKNOWN: &str = "d_missing";
 /// Random-walk intensities tried, in decades above the reference.
 const Q_DECADES: [f64; 7] = [-1.0, 0.5, 2.0, 3.5, 5.0, 6.5, 8.0];
+/// Rounds of [`measurement_noise`]'s search: each output's noise in turn, then the
+/// random walk's intensity again.
+const NOISE_ROUNDS: usize = 2;
+/// Measurement-noise levels tried per output, in decades of the floor given.
+const R_DECADES: [f64; 13] = [
+    -3.0, -2.5, -2.0, -1.5, -1.0, -0.5, 0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0,
+];
 
 /// A place an unknown effort or flow may act.
 #[derive(Clone, Debug)]
@@ -189,11 +196,55 @@ pub fn missing_signals(
     }
     let mut out = Vec::new();
     for p in places(&graph) {
-        if let Some(m) = estimate_at(model, &graph, &p, rec, &x0, outputs, &measured, &nominal) {
+        if let Some((m, _)) = estimate_at(
+            model, &graph, &p, rec, &x0, outputs, &measured, &nominal, false,
+        ) {
             out.push(m);
         }
     }
     Ok(out)
+}
+
+/// The white measurement noise of each of `outputs` (σ, in its unit) that
+/// `model` (with `effects` applied) finds likeliest on `rec` when a free
+/// effort or flow acts at its place that explains most: the smoother of
+/// [`missing_signals`] with each output's noise level chosen by likelihood
+/// too (from a thousandth to a thousand times `sigma`). What a model lacking nothing
+/// but that effort would still leave: a noise floor that the signal's own fast
+/// content does not inflate. Outputs the recording lacks are left out; empty
+/// when no place can be estimated.
+///
+/// # Errors
+/// The nominal model cannot be simulated on the recording.
+pub fn measurement_noise(
+    model: &BondModel,
+    rec: &Recording,
+    effects: &[(&Candidate, &[f64])],
+    outputs: &[String],
+    sigma: &[f64],
+) -> Result<Vec<(String, f64)>> {
+    let (graph, _) = model.edited(effects)?;
+    let nominal = model.run(rec, effects)?;
+    let x0 = |name: &str| nominal.state(name).and_then(|s| s.first().copied());
+    let measured: Vec<(usize, &[f64], f64)> = (outputs.iter().zip(sigma))
+        .filter_map(|(o, s)| {
+            let values = rec.signal(o)?.values.as_slice();
+            let j = nominal.output_names.iter().position(|n| n == o)?;
+            Some((j, values, *s))
+        })
+        .collect();
+    if measured.is_empty() {
+        return Ok(Vec::new());
+    }
+    let best = places(&graph)
+        .iter()
+        .filter_map(|p| {
+            estimate_at(
+                model, &graph, p, rec, &x0, outputs, &measured, &nominal, true,
+            )
+        })
+        .max_by(|a, b| a.0.explained.total_cmp(&b.0.explained));
+    Ok(best.map(|(_, noise)| noise).unwrap_or_default())
 }
 
 /// The graph with the unknown source at `p` and outputs for what acts there:
@@ -269,7 +320,8 @@ fn augmented(
     Some((cm, acting))
 }
 
-/// One place's estimate.
+/// One place's estimate, and each measured output's noise σ the smoother used:
+/// the one given, or with `scan_noise` the likeliest.
 #[allow(clippy::too_many_arguments)]
 fn estimate_at(
     model: &BondModel,
@@ -280,7 +332,8 @@ fn estimate_at(
     outputs: &[String],
     measured: &[(usize, &[f64], f64)],
     nominal: &crate::simulate::Run,
-) -> Option<MissingSignal> {
+    scan_noise: bool,
+) -> Option<(MissingSignal, Vec<(String, f64)>)> {
     let (cm, acting) = augmented(graph, p)?;
     let n = cm.n_states();
     let d_slot = cm.input_names.iter().position(|i| i == UNKNOWN)?;
@@ -327,18 +380,41 @@ fn estimate_at(
     let f = Filter::new(&cm, &drives, d_slot, t, &ys, xs);
     let dscale = f.reference_scale(&x_start)?;
     let q_ref = dscale * dscale / (t[nt - 1] - t[0]).max(1e-300);
-    // The random walk's intensity: the one the measurements find likeliest.
-    let mut best: Option<(f64, f64)> = None;
-    for dec in Q_DECADES {
-        let q = q_ref * 10f64.powf(dec);
-        if let Some(ll) = f.log_likelihood(&x_start, dscale, q)
-            && best.is_none_or(|(_, b)| ll > b)
-        {
-            best = Some((q, ll));
+    // The random walk's intensity and each output's noise: the ones the measurements find
+    // likeliest (the intensity, each noise in turn, the intensity again).
+    let mut r = vec![1.0; ys.len()];
+    let best_q = |r: &[f64]| -> Option<(f64, f64)> {
+        let mut best: Option<(f64, f64)> = None;
+        for dec in Q_DECADES {
+            let q = q_ref * 10f64.powf(dec);
+            if let Some(ll) = f.log_likelihood(&x_start, dscale, q, r)
+                && best.is_none_or(|(_, b)| ll > b)
+            {
+                best = Some((q, ll));
+            }
+        }
+        best
+    };
+    let (mut q, _) = best_q(&r)?;
+    for _ in 0..NOISE_ROUNDS * usize::from(scan_noise) {
+        for j in 0..r.len() {
+            let mut tried: Vec<(f64, f64)> = Vec::new();
+            for dec in R_DECADES {
+                let mut rj = r.clone();
+                rj[j] = 10f64.powf(dec);
+                if let Some(ll) = f.log_likelihood(&x_start, dscale, q, &rj) {
+                    tried.push((dec, ll));
+                }
+            }
+            if let Some(dec) = likeliest(&tried) {
+                r[j] = 10f64.powf(dec);
+            }
+        }
+        if let Some((q_again, _)) = best_q(&r) {
+            q = q_again;
         }
     }
-    let (q, _) = best?;
-    let smoothed = f.smooth(&x_start, dscale, q)?;
+    let smoothed = f.smooth(&x_start, dscale, q, &r)?;
     // What acts there, on the smoothed states; and the outputs they predict.
     let mut scratch = cm.scratch();
     let mut u = vec![0.0; cm.n_inputs()];
@@ -422,7 +498,10 @@ fn estimate_at(
     } else {
         0.0
     };
-    Some(MissingSignal {
+    let noise: Vec<(String, f64)> = (ys.iter().zip(&r))
+        .map(|(&(k, _, s, _), r)| (cm.output_names[k].clone(), s * r))
+        .collect();
+    let m = MissingSignal {
         location: graph.element(p.id).name.clone(),
         place: place(graph, p.id),
         quantity: p.quantity,
@@ -432,6 +511,30 @@ fn estimate_at(
         band: smoothed.var.iter().map(|v| v.max(0.0).sqrt()).collect(),
         acting: signals,
         explained,
+    };
+    Some((m, noise))
+}
+
+/// The log-scale point of greatest likelihood among `tried` (`(log10 x, ll)`,
+/// in increasing `x`): the best point, moved to the top of the parabola
+/// through it and its neighbours when it has both (within half a step).
+fn likeliest(tried: &[(f64, f64)]) -> Option<f64> {
+    let (i, _) = (tried.iter().enumerate()).max_by(|a, b| a.1.1.total_cmp(&b.1.1))?;
+    let x = tried[i].0;
+    if i == 0 || i + 1 == tried.len() {
+        return Some(x);
+    }
+    let ((x0, y0), (x1, y1), (x2, y2)) = (tried[i - 1], tried[i], tried[i + 1]);
+    let denom = (x1 - x0) * (y1 - y2) - (x1 - x2) * (y1 - y0);
+    if denom == 0.0 || !denom.is_finite() {
+        return Some(x1);
+    }
+    let top = x1 - 0.5 * ((x1 - x0).powi(2) * (y1 - y2) - (x1 - x2).powi(2) * (y1 - y0)) / denom;
+    let half = 0.25 * (x2 - x0);
+    Some(if top.is_finite() {
+        top.clamp(x1 - half, x1 + half)
+    } else {
+        x1
     })
 }
 
@@ -595,12 +698,14 @@ impl<'a> Filter<'a> {
         (z, p)
     }
 
-    /// The forward pass: log-likelihood, and the record when `keep`.
+    /// The forward pass: log-likelihood, and the record when `keep`; each
+    /// output's noise is its given σ times `r_scale`.
     fn forward(
         &self,
         x0: &[f64],
         dscale: f64,
         q: f64,
+        r_scale: &[f64],
         keep: bool,
     ) -> Option<(f64, Option<Forward>)> {
         let n = x0.len();
@@ -609,7 +714,9 @@ impl<'a> Filter<'a> {
         let mut u = vec![0.0; self.cm.n_inputs()];
         let mut cursors = vec![0usize; self.drives.len()];
         let mut scratch = self.cm.scratch();
-        let r_diag: Vec<f64> = self.ys.iter().map(|&(_, _, s, _)| s * s).collect();
+        let r_diag: Vec<f64> = (self.ys.iter().zip(r_scale))
+            .map(|(&(_, _, s, _), r)| (s * r).powi(2))
+            .collect();
         let (mut z, mut p) = self.start(x0, dscale);
         let mut ll = 0.0;
         let mut cache: Option<Step> = None;
@@ -682,15 +789,15 @@ impl<'a> Filter<'a> {
         Some((ll, rec))
     }
 
-    fn log_likelihood(&self, x0: &[f64], dscale: f64, q: f64) -> Option<f64> {
-        self.forward(x0, dscale, q, false)
+    fn log_likelihood(&self, x0: &[f64], dscale: f64, q: f64, r_scale: &[f64]) -> Option<f64> {
+        self.forward(x0, dscale, q, r_scale, false)
             .map(|(ll, _)| ll)
             .filter(|v| v.is_finite())
     }
 
     /// The Rauch–Tung–Striebel smoother over the forward pass.
-    fn smooth(&self, x0: &[f64], dscale: f64, q: f64) -> Option<Smoothed> {
-        let (_, rec) = self.forward(x0, dscale, q, true)?;
+    fn smooth(&self, x0: &[f64], dscale: f64, q: f64, r_scale: &[f64]) -> Option<Smoothed> {
+        let (_, rec) = self.forward(x0, dscale, q, r_scale, true)?;
         let r = rec?;
         let nt = r.z_post.len();
         let n = x0.len();

@@ -40,7 +40,9 @@ use crate::fault_tree::{FaultTree, Hypothesis, first_hypothesis_set};
 use crate::file::write_model;
 use crate::graph::BondGraph;
 use crate::qual::Qual;
-use crate::simulate::{Hold, Inputs, ParamChange, Run, SimOptions, simulate, simulate_compiled};
+use crate::simulate::{
+    Hold, Inputs, ParamChange, Run, SimOptions, Solver, simulate, simulate_compiled,
+};
 
 /// Relative tolerance of the adaptive solvers in [`BondModel`]'s predictions.
 pub const RTOL: f64 = 1e-8;
@@ -48,6 +50,18 @@ pub const RTOL: f64 = 1e-8;
 /// Absolute tolerance of the adaptive solvers in [`BondModel`]'s predictions
 /// (in state units: V s, N m s, C; well below the states of the built-ins).
 pub const ATOL: f64 = 1e-10;
+
+/// How far (RMS, relative to the output's spread about its mean) the model's
+/// fixed-step run may lie from its reference run for [`Model::for_fitting`] to
+/// take that step.
+pub const FIXED_STEP_TOLERANCE: f64 = 1e-4;
+
+/// Fixed steps [`Model::for_fitting`] tries, in sample intervals, longest first (a step
+/// never crosses a breakpoint of the inputs, so a recording whose inputs move at every
+/// sample takes at least one step per sample whatever this says).
+const FIXED_STEPS: [f64; 11] = [
+    16.0, 8.0, 4.0, 2.0, 1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125, 0.015625,
+];
 
 /// Newton iterations of the steady start before giving up.
 const STEADY_MAX_ITERATIONS: usize = 100;
@@ -81,6 +95,10 @@ pub struct BondModel {
     added: Vec<String>,
     /// How recorded inputs are held between samples.
     hold: Hold,
+    /// A fixed integration step (s) for a model the exact discretisation does
+    /// not cover, chosen for one recording by [`Model::for_fitting`]; `None`:
+    /// adaptive steps at [`RTOL`] and [`ATOL`].
+    fixed_step: Option<f64>,
 }
 
 impl BondModel {
@@ -92,6 +110,7 @@ impl BondModel {
             start: Start::Rest,
             added: Vec::new(),
             hold: Hold::Zero,
+            fixed_step: None,
         }
     }
 
@@ -125,6 +144,12 @@ impl BondModel {
     /// How the recording's inputs are held between samples.
     pub fn hold(&self) -> Hold {
         self.hold
+    }
+
+    /// The fixed integration step (s) of a copy made for fitting
+    /// ([`Model::for_fitting`]); `None` for adaptive steps.
+    pub fn fixed_step(&self) -> Option<f64> {
+        self.fixed_step
     }
 
     /// How runs start: at rest or at the steady state under the first inputs.
@@ -185,6 +210,7 @@ impl BondModel {
         let opts = SimOptions {
             rtol: RTOL,
             atol: ATOL,
+            fixed_step: self.fixed_step,
             initial_state,
             changes,
             ..SimOptions::default()
@@ -394,6 +420,67 @@ impl Model for BondModel {
         self.graph.inputs().keys().cloned().collect()
     }
 
+    /// A fixed-step copy of the model for fits on `rec` (RODAS4 with no error
+    /// control, [`SimOptions::fixed_step`]): the longest step of 16, 8, … 1/64
+    /// sample intervals ([`FIXED_STEPS`]) at which the model as given (its
+    /// nonlinear laws, or its linear ones on the same fixed-step path) stays
+    /// within [`FIXED_STEP_TOLERANCE`] of its reference run (the exact
+    /// discretisation, or adaptive steps at [`RTOL`]) on every output,
+    /// relative to that output's spread. `None` when no step is good enough or
+    /// the recording is too short to judge.
+    fn for_fitting(&self, rec: &Recording) -> Option<Box<dyn Model>> {
+        if self.fixed_step.is_some() || rec.len() < 3 {
+            return None;
+        }
+        let reference = self.run(rec, &[]).ok()?;
+        let spread: Vec<f64> = (reference.outputs.iter())
+            .map(|y| {
+                let mean = y.iter().sum::<f64>() / y.len().max(1) as f64;
+                (y.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / y.len().max(1) as f64).sqrt()
+            })
+            .collect();
+        let t = rec.t();
+        let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+        if !(dt.is_finite() && dt > 0.0) {
+            return None;
+        }
+        let model = CompiledModel::new(&self.graph).ok()?;
+        let input_names: Vec<String> = self.graph.inputs().keys().cloned().collect();
+        let inputs = Inputs::from_recording_with(rec, &input_names, self.hold);
+        let initial_state = match self.start {
+            Start::Rest => None,
+            Start::SteadyState => Some(steady_start(&self.graph, &model, rec, None).ok()?),
+        };
+        for steps in FIXED_STEPS {
+            let h = dt * steps;
+            let opts = SimOptions {
+                solver: Solver::Rosenbrock,
+                fixed_step: Some(h),
+                initial_state: initial_state.clone(),
+                changes: self.changes.clone(),
+                ..SimOptions::default()
+            };
+            let run = if opts.changes.is_empty() && self.graph.schedule().is_empty() {
+                simulate_compiled(&model, &inputs, t, &opts)
+            } else {
+                simulate(&self.graph, &inputs, t, &opts)
+            };
+            let Ok(run) = run else { continue };
+            let close =
+                (reference.outputs.iter().zip(&run.outputs).zip(&spread)).all(|((a, b), s)| {
+                    let d = (a.iter().zip(b)).map(|(x, y)| (x - y).powi(2)).sum::<f64>()
+                        / a.len().max(1) as f64;
+                    d.sqrt() <= FIXED_STEP_TOLERANCE * s.max(f64::MIN_POSITIVE)
+                });
+            if close {
+                let mut fitting = self.clone();
+                fitting.fixed_step = Some(h);
+                return Some(Box::new(fitting));
+            }
+        }
+        None
+    }
+
     /// `1 / |λ|` of every mode of the model linearised where predictions
     /// start (at rest, or at the steady state), under the recording's first
     /// inputs; pure integrators (λ = 0) and modes the linearisation cannot
@@ -502,6 +589,17 @@ impl Model for BondModel {
             .map_err(|e| model_error(effects, e))
     }
 
+    fn measurement_noise(
+        &self,
+        rec: &Recording,
+        effects: &[(&Candidate, &[f64])],
+        outputs: &[String],
+        sigma: &[f64],
+    ) -> modelgap_core::Result<Vec<(String, f64)>> {
+        crate::estimate::measurement_noise(self, rec, effects, outputs, sigma)
+            .map_err(|e| model_error(effects, e))
+    }
+
     fn law_candidate(&self, law: &modelgap_core::explain::screen::Law) -> Option<Candidate> {
         crate::effects::law_candidate(&self.graph, law)
     }
@@ -530,6 +628,7 @@ impl Model for BondModel {
             start: self.start,
             added,
             hold: self.hold,
+            fixed_step: self.fixed_step,
         }))
     }
 

@@ -264,6 +264,12 @@ pub struct SimOptions {
     pub atol: f64,
     /// Largest step (s) of the adaptive solvers. Default: unlimited.
     pub max_step: f64,
+    /// A fixed step (s) instead of adaptive ones, for a model the exact
+    /// discretisation does not cover: RODAS4 (L-stable, order 4) with no error
+    /// control, so the run is a smooth function of the model's parameters (see
+    /// [`OdeOptions::fixed_step`]); `rtol`, `atol` and `solver` are then not
+    /// used. Default `None`.
+    pub fixed_step: Option<f64>,
     /// Initial state, in state order; default: the model's own (its file's
     /// `[initial]` values, all zero when it gives none: at rest, uncharged).
     pub initial_state: Option<Vec<f64>>,
@@ -291,6 +297,7 @@ impl Default for SimOptions {
             rtol: 1e-8,
             atol: 1e-10,
             max_step: f64::INFINITY,
+            fixed_step: None,
             initial_state: None,
             changes: Vec::new(),
             max_events: DEFAULT_MAX_EVENTS,
@@ -815,6 +822,7 @@ fn simulate_from(
         bps.sort_by(f64::total_cmp);
         bps.dedup();
         let method = match opts.solver {
+            _ if opts.fixed_step.is_some() => Method::Rosenbrock,
             Solver::Dopri5 => Method::Dopri5,
             Solver::Rosenbrock => Method::Rosenbrock,
             _ => Method::Auto,
@@ -823,6 +831,7 @@ fn simulate_from(
             rtol: opts.rtol,
             atol: opts.atol,
             max_step: opts.max_step,
+            fixed_step: opts.fixed_step,
             ..OdeOptions::default()
         };
         let mut sys = System::new(model, &drives);

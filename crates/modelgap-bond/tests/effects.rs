@@ -583,3 +583,46 @@ unit = "m"
             .unwrap_or_else(|e| panic!("{}: {e}", c.id));
     }
 }
+
+/// The copy a fit simulates (`Model::for_fitting`): a fixed step, checked on the model as
+/// given, that keeps every candidate's prediction within a small fraction of the adaptive
+/// solver's, and moves smoothly with a candidate's parameter where the adaptive run's
+/// finite differences are noise.
+#[test]
+fn the_copy_for_fitting_predicts_like_the_model_and_is_smooth_in_a_candidates_parameter() {
+    let g = library::dc_motor();
+    // A motor that reverses: Coulomb friction's switch is exercised.
+    let t = time_grid(0.6, 1000.0);
+    let v: Vec<f64> = t
+        .iter()
+        .map(|t| 6.0 * (2.0 * std::f64::consts::PI * 3.0 * t).sin())
+        .collect();
+    let model = BondModel::new(g);
+    let driven = Recording::new(t.clone(), vec![Signal::new("V", v)]).unwrap();
+    let fitting = model.for_fitting(&driven).expect("a fixed step is found");
+    let coulomb = (model.candidates().into_iter())
+        .find(|c| c.id == "coulomb@1m")
+        .expect("the motor offers Coulomb friction");
+    for value in [0.0, 0.004, 0.01] {
+        let values = [value];
+        let effects = [(&coulomb, &values[..])];
+        let accurate = model.predict_with(&driven, &effects).unwrap();
+        let smooth = fitting.predict_with(&driven, &effects).unwrap();
+        assert!(
+            max_rel_diff(&accurate, &smooth) < 1e-3,
+            "tau_c = {value}: {}",
+            max_rel_diff(&accurate, &smooth)
+        );
+    }
+    // Central differences of the speed at two steps of tau_c agree on the copy.
+    let omega_at = |m: &dyn modelgap_core::Model, tau: f64| -> f64 {
+        let values = [tau];
+        let p = m.predict_with(&driven, &[(&coulomb, &values[..])]).unwrap();
+        p.get("omega").unwrap().iter().sum::<f64>()
+    };
+    let slope = |m: &dyn modelgap_core::Model, h: f64| {
+        (omega_at(m, 0.005 + h) - omega_at(m, 0.005 - h)) / (2.0 * h)
+    };
+    let (a, b) = (slope(fitting.as_ref(), 1e-5), slope(fitting.as_ref(), 1e-7));
+    assert!((a - b).abs() < 1e-4 * a.abs(), "{a} vs {b}");
+}

@@ -145,6 +145,17 @@ pub enum FloorKind {
     /// oversampled resonance, a fast smooth signal): the floor is likely too
     /// high, and "at the floor" is not evidence.
     SignalContent,
+    /// From the output's power where the inputs are quiet
+    /// ([`quiet_band_noise`](crate::residual::quiet_band_noise)): the band
+    /// above the inputs' bandwidth, where a model driven by them puts no power.
+    /// Taken where the third differences carry the signal
+    /// ([`FloorKind::SignalContent`]) and this is lower.
+    QuietBand,
+    /// From discovery's smoother (explain only): the white measurement noise
+    /// that the model with a free effort at the place that explains most finds
+    /// likeliest — what a model lacking nothing else would still leave. Taken
+    /// where the third differences carry the signal ([`FloorKind::SignalContent`]).
+    Smoother,
     /// Estimated, but the record is too short or too flat to check.
     #[default]
     Unchecked,
@@ -179,8 +190,9 @@ pub struct Floor {
 
 impl Floor {
     /// A plain-words warning when the floor of output `name` cannot be
-    /// trusted (correlated noise, the signal's own fast content); `None` for
-    /// a floor given, white or quantised.
+    /// trusted (correlated noise, the signal's own fast content) or was read
+    /// where the inputs are quiet; `None` for a floor given, white, quantised
+    /// or from the smoother (explain says how it found that one).
     pub fn warning(&self, name: &str, unit: &str) -> Option<String> {
         let w = self.whiteness.unwrap_or(f64::NAN);
         let sigma = match unit.trim() {
@@ -198,6 +210,14 @@ impl Floor {
                  oversampled resonance or a fast smooth signal leaks into them, so the floor is \
                  likely too high and reaching it is not evidence that nothing is missing"
             ),
+            FloorKind::QuietBand => {
+                return Some(format!(
+                    "the noise floor of `{name}` ({sigma}) is read from its power above the \
+                     inputs' bandwidth, where a model driven by them puts none: its third \
+                     differences carry the signal itself (an oversampled resonance); give the \
+                     sensor's noise with --noise {name}=SIGMA if you know it"
+                ));
+            }
             _ => return None,
         };
         Some(format!(
@@ -248,6 +268,37 @@ pub fn noise_floor(name: &str, measured: &[f64], given: &BTreeMap<String, f64>) 
         quantum,
         kind,
         whiteness,
+    }
+}
+
+/// [`noise_floor`], and where the third differences carry the signal
+/// ([`FloorKind::SignalContent`]) the output's power where the recorded
+/// `inputs` are quiet instead, when it is lower ([`FloorKind::QuietBand`]):
+/// the band above the inputs' bandwidth holds only noise.
+pub fn noise_floor_beside(
+    name: &str,
+    measured: &[f64],
+    inputs: &[&[f64]],
+    given: &BTreeMap<String, f64>,
+) -> Floor {
+    let floor = noise_floor(name, measured, given);
+    if floor.kind != FloorKind::SignalContent {
+        return floor;
+    }
+    match crate::residual::quiet_band_noise(measured, inputs) {
+        Some(quiet) if quiet < floor.sigma => {
+            let rounding = floor.quantum.map_or(0.0, |q| q / 12f64.sqrt());
+            let size = crate::residual::rms(measured);
+            Floor {
+                sigma: quiet
+                    .hypot(rounding)
+                    .max(1e-9 * size)
+                    .max(f64::MIN_POSITIVE),
+                kind: FloorKind::QuietBand,
+                ..floor
+            }
+        }
+        _ => floor,
     }
 }
 
@@ -342,6 +393,10 @@ pub fn compare_prediction_with_spread(
     let findings = recording_findings(t, &measured_all, &model.time_constants(rec));
     let mut outputs = Vec::new();
     let mut floor_warnings = Vec::new();
+    let input_names = model.inputs();
+    let inputs: Vec<&[f64]> = (input_names.iter())
+        .filter_map(|n| rec.signal(n).map(|s| s.values.as_slice()))
+        .collect();
     for name in names {
         let measured = rec.values(&name)?.to_vec();
         let predicted = prediction
@@ -360,7 +415,7 @@ pub fn compare_prediction_with_spread(
             .zip(&predicted)
             .map(|(m, p)| m - p)
             .collect();
-        let found = noise_floor(&name, &measured, &opts.noise);
+        let found = noise_floor_beside(&name, &measured, &inputs, &opts.noise);
         let Floor {
             sigma: floor,
             given,

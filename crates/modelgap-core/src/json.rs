@@ -141,6 +141,7 @@ pub fn explanation_json(ex: &Explanation) -> Value {
                 "name": o.name,
                 "unit": o.unit,
                 "noise_floor": finite(o.noise_floor),
+                "noise_method": o.noise_method,
                 "rms_before": finite(o.rms_before),
                 "rms_after": finite(o.rms_after),
                 "remaining_windows": remaining,
@@ -178,6 +179,22 @@ pub fn explanation_json(ex: &Explanation) -> Value {
         "effective_samples": finite(ex.effective_samples),
         "warnings": ex.warnings,
         "places": ex.places.iter().map(place_json).collect::<Vec<_>>(),
+        "timings": timings_json(&ex.timings),
+    })
+}
+
+/// Stage timings as JSON: each stage's wall and CPU seconds, and their totals.
+pub fn timings_json(laps: &[crate::timing::StageTime]) -> Value {
+    let stages: Vec<Value> = (laps.iter())
+        .map(
+            |l| json!({"stage": l.stage, "wall_s": finite(l.wall_s), "cpu_s": l.cpu_s.map(finite)}),
+        )
+        .collect();
+    let cpu: Option<f64> = laps.iter().map(|l| l.cpu_s).sum();
+    json!({
+        "stages": stages,
+        "wall_s": finite(laps.iter().map(|l| l.wall_s).sum()),
+        "cpu_s": cpu.map(finite),
     })
 }
 

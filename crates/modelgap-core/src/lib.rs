@@ -71,6 +71,7 @@ pub mod recording;
 pub mod report;
 pub mod residual;
 pub mod story;
+pub mod timing;
 
 pub use calibrate::{Calibration, CalibrationOptions, FittedValue, calibrate};
 pub use compare::{CompareOptions, Comparison, OutputComparison, compare};

@@ -154,6 +154,27 @@ pub trait Model: Send + Sync {
         Ok(Vec::new())
     }
 
+    /// The white measurement noise of each of `outputs` (name, σ in its unit)
+    /// that the model with `effects` applied finds likeliest on `rec` when a
+    /// free effort or flow acts at its place that explains most: what a model
+    /// lacking nothing else would still leave — a noise floor that an
+    /// oversampled resonance's own fast content cannot inflate. `sigma` are
+    /// the floors so far (the search's scale). Empty (the default) when the
+    /// model cannot say.
+    ///
+    /// # Errors
+    /// [`crate::CoreError::Model`] when the model cannot be simulated.
+    fn measurement_noise(
+        &self,
+        rec: &Recording,
+        effects: &[(&Candidate, &[f64])],
+        outputs: &[String],
+        sigma: &[f64],
+    ) -> Result<Vec<(String, f64)>> {
+        let _ = (rec, effects, outputs, sigma);
+        Ok(Vec::new())
+    }
+
     /// A law the screen found ([`crate::explain::screen`]) as a candidate
     /// effect this model can build in, started at the regression's values
     /// and bounded by the data's scale: discovery's third stage confirms it
@@ -190,6 +211,21 @@ pub trait Model: Send + Sync {
     /// The file extension of [`Model::to_file_text`] (`toml`).
     fn file_extension(&self) -> &'static str {
         "txt"
+    }
+
+    /// The model as fits on `rec` should simulate it: the same predictions
+    /// (within a small, checked tolerance), computed so that they are a
+    /// smooth function of every parameter a fit moves. An adaptive ODE solver
+    /// changes its step sequence when a parameter moves, which puts noise of
+    /// the order of its tolerance into every finite difference: a fit of a
+    /// nonlinear model then crawls (on Silverbox, 50 iterations to a point
+    /// ten better ones away). A bond graph answers with a fixed-step model
+    /// whose grid is checked against the adaptive run of the model as given
+    /// (see `BondModel::for_fitting`). `None` (the default): the model as
+    /// given is already smooth, or no grid was good enough.
+    fn for_fitting(&self, rec: &Recording) -> Option<Box<dyn Model>> {
+        let _ = rec;
+        None
     }
 
     /// The loosest fit tolerances worth using on this model: `(ftol, xtol)`

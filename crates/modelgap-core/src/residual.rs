@@ -214,6 +214,119 @@ pub fn third_difference_whiteness(values: &[f64]) -> Option<f64> {
     third_difference_stats(values).1
 }
 
+/// Welch segments of [`quiet_band_noise`]: at most this many samples each.
+const WELCH_SEGMENT: usize = 256;
+
+/// An input is quiet at a frequency where its power is below this share of its peak.
+const QUIET_POWER: f64 = 1e-4;
+
+/// The fewest frequency bins a quiet band must have.
+const QUIET_BINS: usize = 4;
+
+/// The white noise on a measured output, read where the inputs are quiet: the
+/// output's power in the band above the inputs' bandwidth, where no model
+/// driven by them puts power (a linear one puts none, a mildly nonlinear one
+/// little), taken as white noise spread flat over the whole band.
+///
+/// Power spectra by Welch's method (Hann windows of [`WELCH_SEGMENT`]
+/// samples, half overlapping, means removed). The quiet band is every bin
+/// above the highest one where some input has more than [`QUIET_POWER`] of
+/// its peak power, to below the Nyquist bin; it needs [`QUIET_BINS`] bins.
+/// `None` without inputs, with fewer than 64 samples, or without such a band
+/// (an input that excites every frequency: white noise, a fast PWM).
+///
+/// A third difference reads an oversampled resonance's own fast content as
+/// noise; a band the inputs never reach does not: on Silverbox (a multisine
+/// up to 200 Hz at 610 Hz) the output's power above 220 Hz gives σ ≈ 2e-5 V,
+/// where third differences give 4.7e-3 V. It is an upper bound where the
+/// model's own nonlinearity puts harmonics into the band, and too low where a
+/// sensor filters its noise (the noise is then not flat): a filtered signal's
+/// third differences say so first ([`third_difference_whiteness`]).
+///
+/// # Example
+///
+/// ```
+/// # use modelgap_core::residual::quiet_band_noise;
+/// let mut g = modelgap_core::noise::Gaussian::new(3);
+/// // A slow input, a smooth response to it, and white noise of 0.01 on the output.
+/// let u: Vec<f64> = (0..8192).map(|k| (f64::from(k) * 0.01).sin()).collect();
+/// let y: Vec<f64> = u.iter().map(|v| 2.0 * v + 0.01 * g.sample()).collect();
+/// let sigma = quiet_band_noise(&y, &[&u]).unwrap();
+/// assert!((sigma / 0.01 - 1.0).abs() < 0.1, "{sigma}");
+/// // White noise as the input excites every frequency: no quiet band.
+/// let w: Vec<f64> = (0..8192).map(|_| g.sample()).collect();
+/// assert_eq!(quiet_band_noise(&y, &[&w]), None);
+/// ```
+pub fn quiet_band_noise(measured: &[f64], inputs: &[&[f64]]) -> Option<f64> {
+    let n = measured.len();
+    if inputs.is_empty() || n < 64 || inputs.iter().any(|u| u.len() != n) {
+        return None;
+    }
+    let len = WELCH_SEGMENT.min(n / 4).max(16);
+    let psd_y = welch(measured, len);
+    let mut top = 0;
+    for u in inputs {
+        let psd = welch(u, len);
+        let peak = psd.iter().copied().fold(0.0_f64, f64::max);
+        if peak.is_nan() || peak <= 0.0 {
+            continue;
+        }
+        let last = (psd.iter().rposition(|p| *p > QUIET_POWER * peak)).unwrap_or(0);
+        top = top.max(last);
+    }
+    // The quiet bins: above the inputs' last loud bin (and its neighbour, which a
+    // window's leakage reaches), below the Nyquist bin.
+    let band = (top + 2)..(psd_y.len() - 1);
+    if band.len() < QUIET_BINS {
+        return None;
+    }
+    let mean = psd_y[band.clone()].iter().sum::<f64>() / band.len() as f64;
+    (mean.is_finite() && mean > 0.0).then(|| mean.sqrt())
+}
+
+/// Welch's power spectrum of `x` in segments of `len` (Hann window, half
+/// overlapping, each segment's mean removed), bins 0 ..= len/2, scaled so that
+/// white noise of variance σ² reads σ² in every bin.
+fn welch(x: &[f64], len: usize) -> Vec<f64> {
+    let bins = len / 2 + 1;
+    let window: Vec<f64> = (0..len)
+        .map(|i| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / len as f64).cos())
+        .collect();
+    let norm: f64 = window.iter().map(|w| w * w).sum();
+    // The DFT's twiddles, once: cos and sin of 2πk/len.
+    let (cos, sin): (Vec<f64>, Vec<f64>) = (0..len)
+        .map(|k| {
+            let a = 2.0 * std::f64::consts::PI * k as f64 / len as f64;
+            (a.cos(), a.sin())
+        })
+        .unzip();
+    let mut psd = vec![0.0; bins];
+    let mut segments = 0usize;
+    let mut seg = vec![0.0; len];
+    let mut start = 0;
+    while start + len <= x.len() {
+        let part = &x[start..start + len];
+        let mean = part.iter().sum::<f64>() / len as f64;
+        for (s, (v, w)) in seg.iter_mut().zip(part.iter().zip(&window)) {
+            *s = (v - mean) * w;
+        }
+        for (k, p) in psd.iter_mut().enumerate() {
+            let (mut re, mut im) = (0.0, 0.0);
+            for (i, v) in seg.iter().enumerate() {
+                let j = (i * k) % len;
+                re += v * cos[j];
+                im -= v * sin[j];
+            }
+            *p += re * re + im * im;
+        }
+        segments += 1;
+        start += len / 2;
+    }
+    let scale = 1.0 / (norm * segments.max(1) as f64);
+    psd.iter_mut().for_each(|p| *p *= scale);
+    psd
+}
+
 /// Relative tolerance under which two values of a signal count as the same level in
 /// [`quantisation_step`] (decimal text rounds 0.6 to 0.6000000000000001).
 const LEVEL_TOLERANCE: f64 = 1e-9;

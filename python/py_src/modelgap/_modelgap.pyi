@@ -289,7 +289,8 @@ class OutputComparison:
         """How the noise floor was found and how far to trust it: ``"given"``, ``"white"``
         (third differences that are white noise), ``"quantised"``, ``"coloured"`` (correlated
         noise or a filtered signal: likely too low), ``"signal-content"`` (the signal's own
-        fast content: likely too high) or ``"unchecked"``."""
+        fast content: likely too high) or ``"unchecked"``; ``explain`` may also give
+        ``"smoother"`` (see ``OutputSummary.noise_method``)."""
 
     @property
     def rms_over_floor(self) -> float:
@@ -553,6 +554,12 @@ class OutputSummary:
     @property
     def noise_floor(self) -> float:
         """The noise floor σ, in the output's unit (given through ``noise=`` or estimated)."""
+
+    @property
+    def noise_method(self) -> str:
+        """How the noise floor was found: as ``Output.noise_method``, or ``"smoother"``: the
+        white noise the model leaves with a free effort at the place that explains most (taken
+        where the third differences carry the signal)."""
 
     @property
     def rms_before(self) -> float:

@@ -67,7 +67,16 @@ pub fn solve(
     opts: &OdeOptions,
     out: &mut [f64],
 ) -> Result<OdeStats, OdeError> {
-    validate(sys.dim(), t0, x0, t_out, breakpoints, opts, out.len())?;
+    validate(
+        sys.dim(),
+        method,
+        t0,
+        x0,
+        t_out,
+        breakpoints,
+        opts,
+        out.len(),
+    )?;
     let n = x0.len();
     let mut stats = OdeStats::default();
     let mut outputs = Outputs {
@@ -84,7 +93,7 @@ pub fn solve(
         return Ok(stats);
     }
 
-    let h0 = opts.initial_step.unwrap_or(0.0);
+    let h0 = opts.fixed_step.or(opts.initial_step).unwrap_or(0.0);
     let mut active = match method {
         Method::Dopri5 | Method::Auto => {
             Active::Dopri(Dopri5::new(t0, x0, h0, method == Method::Auto))
@@ -270,8 +279,10 @@ impl Outputs<'_> {
 }
 
 /// Checks the arguments of [`solve`].
+#[allow(clippy::too_many_arguments)] // each argument is one part of the problem
 fn validate(
     dim: usize,
+    method: Method,
     t0: f64,
     x0: &[f64],
     t_out: &[f64],
@@ -324,6 +335,16 @@ fn validate(
         && (!h.is_finite() || h <= 0.0)
     {
         return bad(format!("initial_step must be finite and > 0, found {h} s"));
+    }
+    if let Some(h) = opts.fixed_step {
+        if !(h.is_finite() && h > 0.0) {
+            return bad(format!("fixed_step must be finite and > 0, found {h} s"));
+        }
+        if method != Method::Rosenbrock {
+            return bad(format!(
+                "fixed_step needs Method::Rosenbrock (an L-stable method), not {method:?}"
+            ));
+        }
     }
     if opts.max_steps == 0 {
         return bad("max_steps must be > 0, found 0".into());

@@ -30,6 +30,17 @@ pub struct OdeOptions {
     /// First step, in s; `None` lets the solver guess it (Hairer's
     /// algorithm from the first derivatives). Default `None`.
     pub initial_step: Option<f64>,
+    /// A fixed step, in s: [`Method::Rosenbrock`] then takes steps of exactly
+    /// this size (the last of each stretch between breakpoints stretched or
+    /// shortened to land on it), with no error control and no rejection. Its
+    /// result is then a smooth function of the system's parameters — an
+    /// adaptive step sequence jumps when a parameter moves, which makes the
+    /// finite-difference Jacobian of a fit noisy — and its accuracy is the
+    /// caller's to check (RODAS4 is of order 4 and L-stable: a fast mode is
+    /// damped, never blown up). A stage that is not finite or a singular
+    /// matrix ends the solve with its error. Other methods refuse it.
+    /// Default `None` (adaptive).
+    pub fixed_step: Option<f64>,
     /// Largest number of attempted steps (accepted plus rejected) before
     /// [`OdeError::TooManySteps`](crate::ode::OdeError::TooManySteps).
     /// Default `10_000_000`.
@@ -43,6 +54,7 @@ impl Default for OdeOptions {
             atol: 1e-9,
             max_step: f64::INFINITY,
             initial_step: None,
+            fixed_step: None,
             max_steps: 10_000_000,
         }
     }

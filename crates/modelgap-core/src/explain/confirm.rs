@@ -6,9 +6,15 @@
 
 use super::*;
 
+/// The most steps a fit made on the model for fitting goes on for on the model
+/// as given, when the two disagree at its end ([`checked_on_the_model_as_given`]).
+const CHECK_ITERATIONS: usize = 10;
+
 /// A fit of one candidate on top of fixed effects; `fixed[i]` pins parameter i.
 pub(super) struct CandidateProblem<'a> {
     target: &'a Target<'a>,
+    /// The model simulated: the target's model for fitting, or the model as given.
+    model: &'a dyn Model,
     base: &'a [Effect],
     candidate: &'a Candidate,
     fixed: Vec<Option<f64>>,
@@ -33,6 +39,7 @@ impl<'a> CandidateProblem<'a> {
         };
         CandidateProblem {
             target,
+            model: target.model,
             base,
             candidate,
             fixed,
@@ -70,7 +77,7 @@ impl ResidualProblem for CandidateProblem<'_> {
             .collect();
         effects.push((self.candidate, &full));
         let (data, priors) = out.split_at_mut(self.target.n_residuals());
-        self.target.residuals(&effects, data)?;
+        self.target.residuals_of(self.model, &effects, data)?;
         for (o, (i, prior)) in priors.iter_mut().zip(&self.priors) {
             *o = self.target.prior_weight * (full[*i] - prior.mean) / prior.std;
         }
@@ -82,6 +89,8 @@ impl ResidualProblem for CandidateProblem<'_> {
 /// of `first` then those of `second`.
 pub(super) struct PairProblem<'a> {
     target: &'a Target<'a>,
+    /// The model simulated: the target's model for fitting, or the model as given.
+    model: &'a dyn Model,
     first: &'a Candidate,
     second: &'a Candidate,
 }
@@ -98,7 +107,7 @@ impl ResidualProblem for PairProblem<'_> {
     fn residuals(&self, params: &[f64], out: &mut [f64]) -> Result<()> {
         let (a, b) = params.split_at(self.first.params.len());
         self.target
-            .residuals(&[(self.first, a), (self.second, b)], out)
+            .residuals_of(self.model, &[(self.first, a), (self.second, b)], out)
     }
 }
 
@@ -114,6 +123,7 @@ pub(super) fn fit_pair(
 ) -> Result<(FitReport, Vec<f64>)> {
     let problem = PairProblem {
         target,
+        model: target.model,
         first,
         second,
     };
@@ -131,8 +141,59 @@ pub(super) fn fit_pair(
         &fit_opts,
         opts.cancel.as_deref(),
     )?;
-    let mut weighted = vec![0.0; problem.n_residuals()];
-    problem.residuals(&report.params, &mut weighted)?;
+    let checked = PairProblem {
+        model: target.accurate.unwrap_or(target.model),
+        ..problem
+    };
+    checked_on_the_model_as_given(target, &checked, report, &bounds, &scales, &fit_opts, opts)
+}
+
+/// A fit made on the target's model for fitting, held against the model as
+/// given: its report and weighted residual there. When the two models' costs
+/// at the point found differ by more than one unit of evidence (a relative
+/// difference above `1 / n`, `n` the number of whitened samples: an effect
+/// sharper than the fixed step resolves), the fit goes on from that point on
+/// the model as given, for at most [`CHECK_ITERATIONS`] steps. `accurate` is
+/// the problem on the model as given (the same as the fit's when there is no
+/// copy for fitting).
+fn checked_on_the_model_as_given(
+    target: &Target,
+    accurate: &dyn ResidualProblem,
+    mut report: FitReport,
+    bounds: &[(f64, f64)],
+    scales: &[f64],
+    fit_opts: &FitOptions,
+    opts: &ExplainOptions,
+) -> Result<(FitReport, Vec<f64>)> {
+    let mut weighted = vec![0.0; accurate.n_residuals()];
+    accurate.residuals(&report.params, &mut weighted)?;
+    if target.accurate.is_none() {
+        return Ok((report, weighted));
+    }
+    let cost = 0.5 * weighted.iter().map(|r| r * r).sum::<f64>();
+    let n = target.n_whitened();
+    if !(cost.is_finite() && (cost - report.cost_after).abs() * n <= cost) {
+        let again = FitOptions {
+            max_iterations: CHECK_ITERATIONS,
+            ..fit_opts.clone()
+        };
+        let start = report.params.clone();
+        let mut polished = fit(
+            accurate,
+            &start,
+            bounds,
+            scales,
+            &again,
+            opts.cancel.as_deref(),
+        )?;
+        polished.iterations += report.iterations;
+        polished.evaluations += report.evaluations;
+        polished.cost_before = report.cost_before;
+        report = polished;
+        accurate.residuals(&report.params, &mut weighted)?;
+    } else {
+        report.cost_after = cost;
+    }
     Ok((report, weighted))
 }
 
@@ -389,12 +450,16 @@ pub(super) fn confirm(
     let bounds: Vec<(f64, f64)> = c.params.iter().map(|p| (p.lower, p.upper)).collect();
     let scales: Vec<f64> = c.params.iter().map(|p| p.scale).collect();
     let problem = CandidateProblem::new(target, base, c, vec![None; c.params.len()]);
-    match fit(&problem, start, &bounds, &scales, &fit_opts, cancel) {
-        Ok(report) => {
-            let mut weighted = vec![0.0; problem.n_residuals()];
-            if let Err(e) = problem.residuals(&report.params, &mut weighted) {
-                return failed_fit(c, e.to_string());
-            }
+    let res = fit(&problem, start, &bounds, &scales, &fit_opts, cancel);
+    let checked = CandidateProblem {
+        model: target.accurate.unwrap_or(target.model),
+        ..problem
+    };
+    let res = res.and_then(|report| {
+        checked_on_the_model_as_given(target, &checked, report, &bounds, &scales, &fit_opts, opts)
+    });
+    match res {
+        Ok((report, mut weighted)) => {
             // The data's rows only: the priors' are part of the fit, not of the residual.
             weighted.truncate(target.n_residuals());
             Fitted {

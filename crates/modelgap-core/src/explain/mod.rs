@@ -36,7 +36,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::compare::{CompareOptions, Floor, FloorKind, noise_floor, shared_outputs};
+use crate::compare::{
+    CompareOptions, Floor, FloorKind, noise_floor, noise_floor_beside, shared_outputs,
+};
 use crate::effect::{Candidate, Effect, Prior};
 use crate::error::{CoreError, Result};
 use crate::fit::{Cancel, FitOptions, FitReport, ResidualProblem, Termination, fit};
@@ -45,6 +47,7 @@ use crate::judge::{JudgeOptions, Judgement, all_at_floor, judge_residual, record
 use crate::model::Model;
 use crate::recording::Recording;
 use crate::residual::{FailureWindow, failure_windows, rms};
+use crate::timing::Stopwatch;
 
 /// Finite-difference step, relative to each parameter's scale, of the
 /// linearised step that scores a grid start.
@@ -53,6 +56,14 @@ const GRID_FD_STEP: f64 = 1e-3;
 /// Two candidates whose weighted costs differ by less than this fraction are
 /// the same explanation (e.g. "J is off" and "an extra inertia dJ").
 const EQUIVALENT_COST: f64 = 1e-6;
+
+/// Two fits whose residuals differ by less than this share of what they removed
+/// are the same explanation ([`same_explanation`]).
+const SAME_EXPLANATION: f64 = 0.05;
+
+/// A first effect of a pair removes at least this share of what the best single
+/// effect removes.
+const FIRST_SHARE: f64 = 0.5;
 
 /// How many of the best single effects a pair of effects may start from.
 const PAIR_FIRSTS: usize = 3;
@@ -275,6 +286,10 @@ pub struct OutputSummary {
     pub unit: String,
     /// Noise floor (σ).
     pub noise_floor: f64,
+    /// How the noise floor was found (given, white, quantised, coloured,
+    /// signal content, smoother).
+    #[serde(default)]
+    pub noise_method: FloorKind,
     /// RMS of the residual of the model as given (calibrated first, when it
     /// has free parameters: see [`Model::free_parameters`]).
     pub rms_before: f64,
@@ -323,6 +338,13 @@ pub struct Explanation {
     /// not in the JSON), in the order of `places`.
     #[serde(skip)]
     pub missing: Vec<estimate::MissingSignal>,
+    /// How long each stage took (wall and CPU time), in the order run:
+    /// `calibrate` (the model's free parameters), `estimate` (the missing
+    /// effort at each place), `screen` (the library's laws regressed on it),
+    /// `screen-menu` (every candidate sized by one linearised step), `confirm`
+    /// (the best fitted by simulation), `pairs` (a second effect), `judge`.
+    #[serde(default)]
+    pub timings: Vec<crate::timing::StageTime>,
 }
 
 impl Explanation {
@@ -336,13 +358,27 @@ impl Explanation {
 
 /// The data every fit shares: measurements and weights of the shared outputs.
 struct Target<'a> {
+    /// The model fits simulate: the model as given, or its copy for fitting
+    /// ([`Model::for_fitting`]), smooth in its parameters.
     model: &'a dyn Model,
+    /// The model as given, when `model` is its copy for fitting: every
+    /// confirmed fit is checked on it ([`Target::accurate_residuals`]).
+    accurate: Option<&'a dyn Model>,
     rec: &'a Recording,
     names: Vec<String>,
     measured: Vec<&'a [f64]>,
     sigma: Vec<f64>,
     /// How each floor was found.
     floors: Vec<Floor>,
+    /// The noise discovery's smoother takes each output to have: its floor, or,
+    /// where the floor was read where the inputs are quiet (far below what the
+    /// model can reach), the third differences' larger estimate. Given the
+    /// sensor's true noise, a free effort at one place is bent to follow every
+    /// error of the model (an input filter, a sensor lag) as if it were an
+    /// effort there, and no law is left to see (Silverbox: at 1.55e-5 V the
+    /// missing force at the mass follows no law of the library; at 4.7e-3 V it
+    /// is 4.1 k.q³ − 0.36 k.q |k.q|).
+    estimate_sigma: Vec<f64>,
     /// The model's free parameters, calibrated on the recording (their
     /// `initial` values are the calibrated ones), when it has any: every
     /// candidate is fitted jointly with them ([`Target::joint`]).
@@ -402,6 +438,16 @@ impl Target<'_> {
 
     /// Weighted residuals of the model with `effects` into `out`.
     fn residuals(&self, effects: &[(&Candidate, &[f64])], out: &mut [f64]) -> Result<()> {
+        self.residuals_of(self.model, effects, out)
+    }
+
+    /// Weighted residuals of `model` with `effects` into `out`.
+    fn residuals_of(
+        &self,
+        model: &dyn Model,
+        effects: &[(&Candidate, &[f64])],
+        out: &mut [f64],
+    ) -> Result<()> {
         let split = self.calibration.as_ref().map(|_| self.split(effects));
         let joint: Vec<(&Candidate, &[f64])>;
         let effects = match &split {
@@ -411,7 +457,7 @@ impl Target<'_> {
             }
             None => effects,
         };
-        self.model.predict_with(self.rec, effects)?.residuals_into(
+        model.predict_with(self.rec, effects)?.residuals_into(
             &self.names,
             &self.measured,
             &self.sigma,
@@ -613,6 +659,7 @@ fn kind_rank(k: crate::effect::EffectKind) -> u8 {
 /// # Example
 /// See the `modelgap` facade crate and `tests/measurement_loop.rs`.
 pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Result<Explanation> {
+    let mut clock = Stopwatch::start();
     if !(opts.floor_factor.is_finite() && opts.floor_factor >= 1.0) {
         return Err(CoreError::InvalidArgument {
             name: "floor_factor",
@@ -677,25 +724,25 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         return cannot_judge(model, rec, &shared, opts, blocking, warnings);
     }
     let measured: Vec<&[f64]> = names.iter().map(|n| rec.values(n)).collect::<Result<_>>()?;
+    let input_names = model.inputs();
+    let inputs: Vec<&[f64]> = (input_names.iter())
+        .filter_map(|n| rec.signal(n).map(|s| s.values.as_slice()))
+        .collect();
     let floors: Vec<Floor> = names
         .iter()
         .zip(&measured)
-        .map(|(n, m)| noise_floor(n, m, &opts.noise))
+        .map(|(n, m)| noise_floor_beside(n, m, &inputs, &opts.noise))
         .collect();
-    for (n, f) in names.iter().zip(&floors) {
-        warnings.extend(f.warning(n, &model.unit(n)));
-    }
-    // Outputs whose estimated floor is likely too high: reaching it says nothing.
-    let floor_too_high: Vec<String> = (names.iter().zip(&floors))
-        .filter(|(_, f)| f.kind == FloorKind::SignalContent)
-        .map(|(n, _)| format!("`{n}`"))
-        .collect();
+    // Fits simulate a copy of the model that is smooth in its parameters, when it has one.
+    let fitting = model.for_fitting(rec);
     let mut target = Target {
-        model,
+        model: fitting.as_deref().unwrap_or(model),
+        accurate: fitting.as_ref().map(|_| model),
         rec,
         names: names.clone(),
         measured,
         sigma: floors.iter().map(|f| f.sigma).collect(),
+        estimate_sigma: floors.iter().map(|f| f.sigma).collect(),
         floors,
         calibration: None,
         prior_weight: 0.0,
@@ -743,14 +790,33 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             }
         }
     }
+    // A floor the signal inflates is taken from what the model would still leave.
+    warnings.extend(smoother_floors(&mut target));
+    clock.lap("calibrate");
+    // Discovery: the missing effort at each place, the law it follows, and
+    // that law as a candidate confirmed by simulation beside the menu's.
+    let (places, missing, laws) = if opts.discover && opts.only.is_empty() {
+        discover(&target, &mut warnings, &mut clock)
+    } else {
+        (Vec::new(), Vec::new(), Vec::new())
+    };
+    for (n, f) in names.iter().zip(&target.floors) {
+        warnings.extend(f.warning(n, &model.unit(n)));
+    }
+    // Outputs whose estimated floor is likely too high: reaching it says nothing.
+    let floor_too_high: Vec<String> = (names.iter().zip(&target.floors))
+        .filter(|(_, f)| f.kind == FloorKind::SignalContent)
+        .map(|(n, _)| format!("`{n}`"))
+        .collect();
     let target = target;
     let n = target.n_residuals();
     let mut base_weighted = vec![0.0; n];
     target.residuals(&[], &mut base_weighted)?;
     let cost_before = 0.5 * base_weighted.iter().map(|r| r * r).sum::<f64>();
     let rms_before = target.rms_per_output(&base_weighted);
-    let judge = Judge::new(&target, opts);
+    let mut judge = Judge::new(&target, opts);
     let judged_before = judge.judge(&base_weighted);
+    let floors_before = judge.floors.clone();
 
     // Fit every candidate, in parallel.
     let free: Vec<&str> = (target.calibration.iter())
@@ -766,13 +832,6 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         })
         .map(|c| target.joint(&c))
         .collect();
-    // Discovery: the missing effort at each place, the law it follows, and
-    // that law as a candidate confirmed by simulation beside the menu's.
-    let (places, missing, laws) = if opts.discover && opts.only.is_empty() {
-        discover(&target, &mut warnings)
-    } else {
-        (Vec::new(), Vec::new(), Vec::new())
-    };
     let mut candidates = candidates;
     candidates.extend(laws.iter().map(|c| target.joint(c)));
     let done = AtomicUsize::new(0);
@@ -812,6 +871,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         })
         .collect();
     let total = confirmed.iter().filter(|c| **c).count();
+    clock.lap("screen-menu");
     let fitted: Vec<(Fitted, bool)> = screens
         .into_par_iter()
         .zip(confirmed)
@@ -835,6 +895,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         })
         .collect();
     let interrupted = cancelled();
+    clock.lap("confirm");
     let fitted: Vec<Fitted> = fitted
         .into_iter()
         .filter(|(_, finished)| *finished || !interrupted)
@@ -873,14 +934,14 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             r.error.as_deref().unwrap_or("")
         ));
     }
-    let summary = |after_weighted: &[f64], judged: Vec<Judgement>| {
-        output_summaries(&target, &rms_before, after_weighted, judged)
+    let summary = |after_weighted: &[f64], judged: Vec<Judgement>, floors: &[Floor]| {
+        output_summaries(&target, floors, &rms_before, after_weighted, judged)
     };
     // An interrupted run: no verdict, nothing chosen, only finished fits ranked.
     let stopped = |why: String, ranking, warnings| Explanation {
         model: model.name(),
         verdict: Verdict::Interrupted,
-        outputs: summary(&base_weighted, judged_before.clone()),
+        outputs: summary(&base_weighted, judged_before.clone(), &floors_before),
         ranked: ranking,
         chosen: Vec::new(),
         margin,
@@ -890,6 +951,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         reasons: vec![why],
         places: places.clone(),
         missing: missing.clone(),
+        timings: Vec::new(),
     };
     if interrupted {
         let why = format!(
@@ -897,7 +959,9 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
              only the fits that finished)",
             fitted.len()
         );
-        return Ok(stopped(why, ranking, warnings));
+        let mut ex = stopped(why, ranking, warnings);
+        ex.timings = clock.into_laps();
+        return Ok(ex);
     }
 
     let mut chosen: Vec<RankedCandidate> = Vec::new();
@@ -932,6 +996,9 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         if let Some(f) = fitted.iter().find(|f| f.candidate.id == best.candidate.id) {
             after_weighted = f.weighted.clone();
         }
+        // A floor taken from the smoother is taken again with the effect built in: what a
+        // model lacking less still leaves.
+        warnings.extend(judge.refine_floors(best));
         judged_after = judge.judge(&after_weighted);
         if !all_at_floor(&judged_after, opts.floor_factor) && opts.max_effects >= 2 {
             // The pair may start from any of the few best singles: the best single effect
@@ -941,20 +1008,33 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             let reference = (fitted.iter())
                 .find(|f| f.candidate.id == best.candidate.id)
                 .map_or(base_weighted.as_slice(), |f| f.weighted.as_slice());
-            // The same physics said another way (a leak and a law linear in the level) is one
-            // first, not two: the simplest statement, which ranks first among its equivalents.
+            // The same physics said another way (a leak and a law linear in the level, a
+            // cubic spring and a law cubic in its displacement) is one first, not two: the
+            // simplest statement, which ranks first among its equivalents.
+            let residual_of = |id: &str| {
+                (fitted.iter())
+                    .find(|f| f.candidate.id == id)
+                    .map(|f| f.weighted.as_slice())
+            };
             let mut firsts: Vec<&RankedCandidate> = Vec::new();
+            // A first that removes less than half of what the best removes would need its
+            // second to make up the rest: the pair search starts from the strong ones.
+            let strong = cost_before - FIRST_SHARE * (cost_before - best.cost);
             for r in ranking.iter().filter(|r| {
-                r.error.is_none()
-                    && !r.screened
-                    && r.score > opts.significance
-                    && r.cost < cost_before
+                r.error.is_none() && !r.screened && r.score > opts.significance && r.cost <= strong
             }) {
-                if firsts.len() < PAIR_FIRSTS
-                    && !firsts
-                        .iter()
-                        .any(|f| f.equivalent.contains(&r.candidate.id))
-                {
+                // A law that leaves what a first already leaves is that first said in the
+                // library's terms; named effects that leave alike may still pair unalike (a
+                // dead zone in the drive and a brush drop, beside Coulomb friction).
+                let same = |f: &&RankedCandidate| {
+                    f.equivalent.contains(&r.candidate.id)
+                        || (is_law(r) || is_law(f))
+                            && match (residual_of(&f.candidate.id), residual_of(&r.candidate.id)) {
+                                (Some(a), Some(b)) => same_explanation(&base_weighted, a, b),
+                                _ => false,
+                            }
+                };
+                if firsts.len() < PAIR_FIRSTS && !firsts.iter().any(same) {
                     firsts.push(r);
                 }
             }
@@ -994,10 +1074,13 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
                     second = Some(p);
                 }
             }
+            clock.lap("pairs");
             if cancelled() {
                 let why = "interrupted while fitting a second effect on top of the first: no \
                            verdict";
-                return Ok(stopped(why.to_string(), ranking, warnings));
+                let mut ex = stopped(why.to_string(), ranking, warnings);
+                ex.timings = clock.into_laps();
+                return Ok(ex);
             }
             if let Some((mut pair, weighted)) = second {
                 // The pair in the order of each effect's own evidence alone.
@@ -1049,10 +1132,12 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             r.qualitative_reason = check.reason;
         }
     }
+    let outputs = summary(&after_weighted, judged_after, &judge.floors);
+    clock.lap("judge");
     Ok(Explanation {
         model: model.name(),
         verdict,
-        outputs: summary(&after_weighted, judged_after),
+        outputs,
         ranked: ranking,
         chosen,
         margin,
@@ -1062,7 +1147,75 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         reasons,
         places,
         missing,
+        timings: clock.into_laps(),
     })
+}
+
+/// The floors of `target`'s outputs that the signal's own fast content
+/// inflates ([`FloorKind::SignalContent`]) replaced by the smoother's: the
+/// white measurement noise that the calibrated model with a free effort at
+/// its place that explains most finds likeliest
+/// ([`Model::measurement_noise`]) — what a model lacking nothing else would
+/// still leave — when it is lower. The weights of the priors follow the new
+/// floors. Where the floor was read where the inputs are quiet
+/// ([`FloorKind::QuietBand`]), discovery's smoother takes the third
+/// differences' estimate instead ([`Target::estimate_sigma`]). Returns a note
+/// per floor replaced (or why none could be).
+fn smoother_floors(target: &mut Target) -> Vec<String> {
+    for j in 0..target.names.len() {
+        if target.floors[j].kind == FloorKind::QuietBand {
+            let third = noise_floor(&target.names[j], target.measured[j], &BTreeMap::new());
+            target.estimate_sigma[j] = third.sigma.max(target.sigma[j]);
+        }
+    }
+    if !(target.floors.iter()).any(|f| f.kind == FloorKind::SignalContent) {
+        return Vec::new();
+    }
+    let split = target.split(&[]);
+    let effects: Vec<(&Candidate, &[f64])> = split.iter().map(|(c, v)| (c, v.as_slice())).collect();
+    let noise = match (target.model).measurement_noise(
+        target.rec,
+        &effects,
+        &target.names,
+        &target.sigma,
+    ) {
+        Ok(noise) => noise,
+        Err(e) => return vec![format!("the measurement noise could not be estimated: {e}")],
+    };
+    let mut notes = Vec::new();
+    let mut ratio2 = 0.0;
+    for j in 0..target.names.len() {
+        let name = &target.names[j];
+        let old = target.floors[j];
+        let Some(&(_, sigma)) = noise.iter().find(|(n, _)| n == name) else {
+            ratio2 += 1.0;
+            continue;
+        };
+        if old.kind != FloorKind::SignalContent || !(sigma > 0.0 && sigma < old.sigma) {
+            ratio2 += 1.0;
+            continue;
+        }
+        ratio2 += (old.sigma / sigma).powi(2);
+        target.sigma[j] = sigma;
+        target.estimate_sigma[j] = sigma;
+        target.floors[j] = Floor {
+            sigma,
+            kind: FloorKind::Smoother,
+            ..old
+        };
+        let unit = target.model.unit(name);
+        notes.push(format!(
+            "the noise floor of `{name}` is {sigma:.3e} {unit}: the white noise the model \
+             leaves with a free effort where it fails most (the likeliest under discovery's \
+             smoother); the third differences gave {:.3e} {unit}, but the signal's own fast \
+             content is in them",
+            old.sigma
+        ));
+    }
+    if !notes.is_empty() && target.prior_weight > 0.0 {
+        target.prior_weight *= (ratio2 / target.names.len().max(1) as f64).sqrt();
+    }
+    notes
 }
 
 /// Discovery's estimate and screen on the calibrated model: each place's
@@ -1071,6 +1224,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
 fn discover(
     target: &Target,
     warnings: &mut Vec<String>,
+    clock: &mut Stopwatch,
 ) -> (
     Vec<estimate::PlaceFinding>,
     Vec<estimate::MissingSignal>,
@@ -1078,23 +1232,26 @@ fn discover(
 ) {
     let split = target.split(&[]);
     let effects: Vec<(&Candidate, &[f64])> = split.iter().map(|(c, v)| (c, v.as_slice())).collect();
-    let mut missing =
-        match target
-            .model
-            .missing_signals(target.rec, &effects, &target.names, &target.sigma)
-        {
-            Ok(m) => m,
-            Err(e) => {
-                warnings.push(format!("the missing effort could not be estimated: {e}"));
-                return (Vec::new(), Vec::new(), Vec::new());
-            }
-        };
+    let mut missing = match target.model.missing_signals(
+        target.rec,
+        &effects,
+        &target.names,
+        &target.estimate_sigma,
+    ) {
+        Ok(m) => m,
+        Err(e) => {
+            warnings.push(format!("the missing effort could not be estimated: {e}"));
+            return (Vec::new(), Vec::new(), Vec::new());
+        }
+    };
     missing.sort_by(|a, b| b.explained.total_cmp(&a.explained));
+    clock.lap("estimate");
     let linear = target.calibration.is_none();
     let laws: Vec<Option<screen::Law>> = missing
         .par_iter()
         .map(|m| screen::screen_with(m, linear))
         .collect();
+    clock.lap("screen");
     let mut places = Vec::new();
     let mut candidates = Vec::new();
     let best = missing.first().map_or(0.0, |m| m.explained);
@@ -1119,6 +1276,18 @@ fn discover(
         });
     }
     (places, missing, candidates)
+}
+
+/// Whether two fits leave the same residual (weighted, `a` and `b`) of the
+/// model's own (`before`): they differ by less than [`SAME_EXPLANATION`] of
+/// what the better of them removed. A cubic spring and a law cubic in its
+/// displacement are one explanation: a second effect sought on top of each
+/// would be sought twice.
+fn same_explanation(before: &[f64], a: &[f64], b: &[f64]) -> bool {
+    let sq = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>();
+    let removed = sq(before) - sq(a).min(sq(b));
+    let apart: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
+    a.len() == b.len() && removed > 0.0 && apart <= SAME_EXPLANATION * removed
 }
 
 /// Orders the ranking: by score; then Occam — a candidate with more
@@ -1221,10 +1390,11 @@ fn order_ranking(ranking: &mut Vec<RankedCandidate>, significance: f64) {
     }
 }
 
-/// The per-output summaries: floor, RMS before, RMS and windows after, and
-/// the judgement of what remains.
+/// The per-output summaries: floor (as the judge last took it), RMS before,
+/// RMS and windows after, and the judgement of what remains.
 fn output_summaries(
     target: &Target,
+    floors: &[Floor],
     rms_before: &[f64],
     after_weighted: &[f64],
     judged: Vec<Judgement>,
@@ -1249,11 +1419,12 @@ fn output_summaries(
                 .collect();
             // The band of the noise the judge took the residual for
             // (coloured noise is wider than the white floor).
-            let band = 4.0 * judgement.noise_sigma.max(target.sigma[j]);
+            let band = 4.0 * judgement.noise_sigma.max(floors[j].sigma);
             OutputSummary {
                 name: name.clone(),
                 unit: target.model.unit(name),
-                noise_floor: target.sigma[j],
+                noise_floor: floors[j].sigma,
+                noise_method: floors[j].kind,
                 rms_before: rms_before[j],
                 rms_after: rms_after[j],
                 remaining_windows: failure_windows(t, &resid, band, 5.0 * dt),
@@ -1286,16 +1457,18 @@ fn cannot_judge(
         let resid: Vec<f64> = measured.iter().zip(p).map(|(m, p)| m - p).collect();
         // A constant output shows no noise at all.
         let flat = measured.iter().all(|v| *v == measured[0]);
-        let floor = if flat {
-            0.0
+        let (floor, kind) = if flat {
+            (0.0, FloorKind::Unchecked)
         } else {
-            noise_floor(name, measured, &opts.noise).sigma
+            let f = noise_floor(name, measured, &opts.noise);
+            (f.sigma, f.kind)
         };
         let rms_before = rms(&resid);
         outputs.push(OutputSummary {
             name: name.clone(),
             unit: model.unit(name),
             noise_floor: floor,
+            noise_method: kind,
             rms_before,
             rms_after: rms_before,
             remaining_windows: Vec::new(),
@@ -1315,6 +1488,7 @@ fn cannot_judge(
         reasons,
         places: Vec::new(),
         missing: Vec::new(),
+        timings: Vec::new(),
     })
 }
 
@@ -1323,6 +1497,9 @@ struct Judge<'a> {
     target: &'a Target<'a>,
     inputs: Vec<(&'a str, &'a [f64])>,
     opts: JudgeOptions,
+    /// Each output's floor as the judge takes it: the target's, lowered by
+    /// [`Judge::refine_floors`] where the smoother gave it.
+    floors: Vec<Floor>,
 }
 
 impl<'a> Judge<'a> {
@@ -1345,7 +1522,56 @@ impl<'a> Judge<'a> {
                 outputs: target.names.len(),
                 ..JudgeOptions::default()
             },
+            floors: target.floors.clone(),
         }
+    }
+
+    /// The floors taken from the smoother ([`FloorKind::Smoother`]) taken
+    /// again with `chosen` built in (and the calibration as fitted with it):
+    /// the measurement noise a model that lacks less still leaves. A lower
+    /// floor replaces the one before. Returns a note per floor lowered.
+    fn refine_floors(&mut self, chosen: &RankedCandidate) -> Vec<String> {
+        if !self.floors.iter().any(|f| f.kind == FloorKind::Smoother) {
+            return Vec::new();
+        }
+        let target = self.target;
+        let calibration = (chosen.calibration.clone())
+            .map(|e| (e.candidate, e.values))
+            .or_else(|| (target.calibration.clone()).map(|c| (c.clone(), c.initial())));
+        let first = chosen.effect();
+        let effects: Vec<(Candidate, Vec<f64>)> = calibration
+            .into_iter()
+            .chain(std::iter::once((first.candidate, first.values)))
+            .collect();
+        let effects: Vec<(&Candidate, &[f64])> =
+            effects.iter().map(|(c, v)| (c, v.as_slice())).collect();
+        let sigma: Vec<f64> = self.floors.iter().map(|f| f.sigma).collect();
+        let Ok(noise) =
+            (target.model).measurement_noise(target.rec, &effects, &target.names, &sigma)
+        else {
+            return Vec::new();
+        };
+        let mut notes = Vec::new();
+        for (j, floor) in self.floors.iter_mut().enumerate() {
+            let name = &target.names[j];
+            if floor.kind != FloorKind::Smoother {
+                continue;
+            }
+            if let Some(&(_, s)) = noise.iter().find(|(n, _)| n == name)
+                && s > 0.0
+                && s < floor.sigma
+            {
+                notes.push(format!(
+                    "with {} built in, the smoother leaves `{name}` a noise of {s:.3e} {} (was \
+                     {:.3e}): the floor it is judged against",
+                    chosen.candidate.name,
+                    target.model.unit(name),
+                    floor.sigma
+                ));
+                floor.sigma = s;
+            }
+        }
+        notes
     }
 
     /// Judges each output's residual (weighted residuals in, per output).
@@ -1361,7 +1587,7 @@ impl<'a> Judge<'a> {
                 judge_residual(
                     self.target.rec.t(),
                     &resid,
-                    &self.target.floors[j],
+                    &self.floors[j],
                     &self.inputs,
                     &self.opts,
                 )

@@ -146,7 +146,7 @@ pub(super) fn laws_on_top(target: &Target, best: &RankedCandidate) -> Vec<Candid
     let effects: Vec<(&Candidate, &[f64])> =
         effects.iter().map(|(c, v)| (c, v.as_slice())).collect();
     let Ok(mut missing) =
-        (target.model).missing_signals(target.rec, &effects, &target.names, &target.sigma)
+        (target.model).missing_signals(target.rec, &effects, &target.names, &target.estimate_sigma)
     else {
         return Vec::new();
     };

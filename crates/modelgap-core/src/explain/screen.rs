@@ -808,7 +808,12 @@ pub fn screen(m: &MissingSignal) -> Option<Law> {
 /// [`screen`], with or without the linear family: a model whose free
 /// parameters are calibrated with every candidate already has its linear
 /// terms (a stiffness, a damping, a gain that are free), and a law's linear
-/// term beside them would be the same parameter twice.
+/// term beside them would be the same parameter twice. Without it, the
+/// linear terms are still regressed out first, as nuisance (the missing
+/// effort and every term made orthogonal to them): the calibration has
+/// already taken the best linear part of a law (a linear spring calibrated
+/// on a hardening one is stiffer than it is), and the law's coefficients are
+/// those it has beside a linear term that the joint fit re-adjusts.
 pub fn screen_with(m: &MissingSignal, linear: bool) -> Option<Law> {
     let n_all = m.value.len();
     if n_all < 20 || m.t.len() != n_all || m.band.len() != n_all {
@@ -842,9 +847,28 @@ pub fn screen_with(m: &MissingSignal, linear: bool) -> Option<Law> {
         .map(|b| (median / b.max(median)).powi(2))
         .collect();
     let mut lib = library(m, &idx);
+    // Each block's columns as built, for the law's values: those regressed on may be made
+    // orthogonal to the nuisance below.
+    let mut y = y;
+    let mut raw: Vec<Vec<Vec<f64>>> = Vec::new();
     if !linear {
+        let nuisance: Vec<Vec<f64>> = (lib.iter())
+            .filter(|b| b.family == Family::Linear)
+            .flat_map(|b| b.columns.iter().cloned())
+            .collect();
         lib.retain(|b| b.family != Family::Linear);
+        raw = lib.iter().map(|b| b.columns.clone()).collect();
+        let refs: Vec<&[f64]> = nuisance.iter().map(Vec::as_slice).collect();
+        if !refs.is_empty() {
+            orthogonalise(&refs, &mut y, &w);
+            for b in &mut lib {
+                for col in &mut b.columns {
+                    orthogonalise(&refs, col, &w);
+                }
+            }
+        }
     }
+    let y = y;
     let n = idx.len();
     let half = n / 2;
     let total: f64 = (0..n).map(|r| w[r] * y[r] * y[r]).sum();
@@ -960,8 +984,16 @@ pub fn screen_with(m: &MissingSignal, linear: bool) -> Option<Law> {
         .flat_map(|&c| lib[c].columns.iter().map(Vec::as_slice))
         .collect();
     let (beta, var, rss) = wls(&cols, &y, &w)?;
+    // The law's own values: its terms as built (not made orthogonal to the nuisance).
+    let built: Vec<&[f64]> = if raw.is_empty() {
+        cols.clone()
+    } else {
+        (chosen.iter())
+            .flat_map(|&c| raw[c].iter().map(Vec::as_slice))
+            .collect()
+    };
     let fitted: Vec<(usize, f64)> = (0..n)
-        .map(|r| (idx[r], (0..beta.len()).map(|i| beta[i] * cols[i][r]).sum()))
+        .map(|r| (idx[r], (0..beta.len()).map(|i| beta[i] * built[i][r]).sum()))
         .collect();
     let n_eff = effective(&residual).min(n as f64);
     let dof = (n_eff - beta.len() as f64).max(1.0);
@@ -971,7 +1003,12 @@ pub fn screen_with(m: &MissingSignal, linear: bool) -> Option<Law> {
     let mut terms: Vec<LawTerm> = Vec::new();
     let mut i = 0;
     for &c in &chosen {
-        for (t, col) in lib[c].terms.iter().zip(&lib[c].columns) {
+        let columns = if raw.is_empty() {
+            &lib[c].columns
+        } else {
+            &raw[c]
+        };
+        for (t, col) in lib[c].terms.iter().zip(columns) {
             let mut t = t.clone();
             t.coefficient = beta[i];
             t.std_error = (var[i] * s2).sqrt();
@@ -1008,6 +1045,16 @@ pub fn screen_with(m: &MissingSignal, linear: bool) -> Option<Law> {
         effective_samples: n_eff,
         fitted,
     })
+}
+
+/// `v` minus its weighted least-squares fit on `cols`: the part of `v`
+/// orthogonal to them (left as it is when they are degenerate).
+fn orthogonalise(cols: &[&[f64]], v: &mut [f64], w: &[f64]) {
+    if let Some((beta, _, _)) = wls(cols, v, w) {
+        for (r, x) in v.iter_mut().enumerate() {
+            *x -= (0..beta.len()).map(|i| beta[i] * cols[i][r]).sum::<f64>();
+        }
+    }
 }
 
 /// Column `i` of the design made of the blocks `chosen`.
