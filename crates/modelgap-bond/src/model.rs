@@ -422,7 +422,7 @@ impl Model for BondModel {
 
     /// A fixed-step copy of the model for fits on `rec` (RODAS4 with no error
     /// control, [`SimOptions::fixed_step`]): the longest step of 16, 8, … 1/64
-    /// sample intervals ([`FIXED_STEPS`]) at which the model as given (its
+    /// sample intervals at which the model as given (its
     /// nonlinear laws, or its linear ones on the same fixed-step path) stays
     /// within [`FIXED_STEP_TOLERANCE`] of its reference run (the exact
     /// discretisation, or adaptive steps at [`RTOL`]) on every output,

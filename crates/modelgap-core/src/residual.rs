@@ -228,10 +228,11 @@ const QUIET_BINS: usize = 4;
 /// driven by them puts power (a linear one puts none, a mildly nonlinear one
 /// little), taken as white noise spread flat over the whole band.
 ///
-/// Power spectra by Welch's method (Hann windows of [`WELCH_SEGMENT`]
-/// samples, half overlapping, means removed). The quiet band is every bin
-/// above the highest one where some input has more than [`QUIET_POWER`] of
-/// its peak power, to below the Nyquist bin; it needs [`QUIET_BINS`] bins.
+/// Power spectra by Welch's method (Hann windows of 256 samples, fewer on a
+/// short record, half overlapping, means removed). The quiet band is every
+/// bin above the highest one where some input has more than 1e-4 of its peak
+/// power (and its neighbour, which the window's leakage reaches), to below
+/// the Nyquist bin; it needs 4 bins.
 /// `None` without inputs, with fewer than 64 samples, or without such a band
 /// (an input that excites every frequency: white noise, a fast PWM).
 ///
