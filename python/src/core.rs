@@ -859,6 +859,15 @@ impl PyExplanation {
         ))
     }
 
+    /// How long each stage took: ``(stage, wall_s, cpu_s)`` in the order run (``cpu_s`` is the
+    /// whole process's CPU time over the stage, every thread; ``None`` where not measured).
+    #[getter]
+    fn timings(&self) -> Vec<(String, f64, Option<f64>)> {
+        (self.inner.timings.iter())
+            .map(|t| (t.stage.clone(), t.wall_s, t.cpu_s))
+            .collect()
+    }
+
     /// The ranking (the ``top`` best) and the verdict as text.
     #[pyo3(signature = (top = 5))]
     fn text(&self, top: usize) -> String {
@@ -878,11 +887,17 @@ impl PyExplanation {
         Ok((restore, (to_state(&slf.get().inner)?,)))
     }
 
-    /// Equal when everything a pickle keeps is equal (the missing-effort series are not kept).
+    /// Equal when everything a pickle keeps is equal (the missing-effort series are not kept),
+    /// the stage timings aside: two runs that say the same thing are the same explanation.
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        let said = |e: &modelgap::Explanation| {
+            let mut e = e.clone();
+            e.timings.clear();
+            to_state(&e)
+        };
         other.cast::<PyExplanation>().is_ok_and(|o| {
             matches!(
-                (to_state(&o.get().inner), to_state(&self.inner)),
+                (said(&o.get().inner), said(&self.inner)),
                 (Ok(a), Ok(b)) if a == b
             )
         })

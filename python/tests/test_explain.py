@@ -214,3 +214,14 @@ def test_where_the_model_fails_reaches_python(coulomb_explained: modelgap.Explan
     assert (band >= 0).all()
     with pytest.raises(modelgap.DataError, match="no missing effort was estimated at 'x'"):
         ex.missing("x")
+
+
+def test_stage_timings_and_floor_method_are_read(coulomb_explained: modelgap.Explanation):
+    stages = [s for s, _, _ in coulomb_explained.timings]
+    assert stages[0] == "calibrate" and "confirm" in stages and stages[-1] == "judge"
+    assert all(wall >= 0.0 and (cpu is None or cpu >= 0.0) for _, wall, cpu in coulomb_explained.timings)
+    # The bundled-style recording's noise is white: its floor comes from third differences.
+    assert {o.noise_method for o in coulomb_explained.outputs} == {"white"}
+    # Timings are not part of what an explanation says.
+    again = pickle.loads(pickle.dumps(coulomb_explained))
+    assert again == coulomb_explained and again.timings == coulomb_explained.timings

@@ -679,6 +679,14 @@ class Explanation:
                 explanation restored from a pickle keeps no series.
         """
 
+    @property
+    def timings(self) -> list[tuple[str, float, float | None]]:
+        """How long each stage took, in the order run: ``(stage, wall_s, cpu_s)`` with stage
+        one of ``"calibrate"``, ``"estimate"``, ``"screen"``, ``"screen-menu"``, ``"confirm"``,
+        ``"pairs"``, ``"judge"``; times in seconds, ``cpu_s`` the whole process's CPU time over
+        the stage (every thread; ``None`` where the platform does not say). Not part of
+        equality."""
+
     def text(self, top: int = 5) -> str:
         """The ranking and the verdict as text (what the command line prints).
 
