@@ -921,7 +921,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         .iter()
         .map(|f| ranked(&target, f, &white, n_eff, n))
         .collect();
-    order_ranking(&mut ranking, opts.significance);
+    order_ranking(&mut ranking, opts.significance, cost_before);
     let margin = match (ranking.first(), ranking.get(1)) {
         (Some(a), Some(b)) if b.score.is_finite() => a.score - b.score,
         (Some(a), _) => a.score,
@@ -1290,29 +1290,36 @@ fn same_explanation(before: &[f64], a: &[f64], b: &[f64]) -> bool {
     a.len() == b.len() && removed > 0.0 && apart <= SAME_EXPLANATION * removed
 }
 
-/// Orders the ranking: by score; then Occam — a candidate with more
-/// parameters must beat a simpler one by the significance margin to rank
-/// above it (a flexible coupling can mimic an extra inertia plus a little
-/// sensor lag, a shade better but not significantly so); then, within a run
-/// of equivalent candidates (same cost, same number of parameters), the
-/// simplest change first; and each candidate lists its equivalents.
 /// Whether a ranked candidate is a law discovery found (`law@…`).
 fn is_law(r: &RankedCandidate) -> bool {
     r.candidate.id.starts_with("law@")
 }
 
-fn order_ranking(ranking: &mut Vec<RankedCandidate>, significance: f64) {
-    // Confirmed fits first: a screen's estimate never outranks a fit.
+/// Orders the ranking: confirmed fits before screened ones, fits that lower
+/// the error (below `cost_before`) before those that do not, then by score;
+/// then Occam — a candidate with more parameters must beat a simpler one by
+/// the significance margin to rank above it (a flexible coupling can mimic an
+/// extra inertia plus a little sensor lag, a shade better but not
+/// significantly so); then, within a run of equivalent candidates (same cost,
+/// same number of parameters), the simplest change first; and each candidate
+/// lists its equivalents.
+fn order_ranking(ranking: &mut Vec<RankedCandidate>, significance: f64, cost_before: f64) {
+    // Confirmed fits first: a screen's estimate never outranks a fit. Then the fits that
+    // lower the error: one that raises it cannot rank above one that lowers it, whatever
+    // its score (the score weighs the residual whitened, which a fit that follows the
+    // residual's wander can shrink while the error grows).
+    let lowers = |r: &RankedCandidate| r.error.is_none() && r.cost < cost_before;
     ranking.sort_by(|a, b| {
         a.screened
             .cmp(&b.screened)
+            .then(lowers(b).cmp(&lowers(a)))
             .then(b.score.total_cmp(&a.score))
     });
     if let Some(best) = ranking.first().map(|r| r.score).filter(|s| s.is_finite()) {
         let simplest = ranking
             .iter()
             .enumerate()
-            .filter(|(_, r)| r.error.is_none() && !r.screened && r.score >= best - significance)
+            .filter(|(_, r)| lowers(r) && !r.screened && r.score >= best - significance)
             .min_by(|(_, a), (_, b)| {
                 a.candidate
                     .params
@@ -1710,6 +1717,44 @@ mod tests {
             .map(|(&t, e)| (2.0 * std::f64::consts::PI * t).sin() + extra(t) + e)
             .collect();
         Recording::new(t, vec![Signal::new("y", y)]).unwrap()
+    }
+
+    /// A ranked fit of a toy candidate with this cost and score.
+    fn ranked_fit(id: &str, cost: f64, score: f64) -> RankedCandidate {
+        RankedCandidate {
+            candidate: Candidate {
+                id: id.into(),
+                name: id.into(),
+                kind: EffectKind::MissingElement,
+                acts_on: "y".into(),
+                params: vec![param("v", 0.1)],
+            },
+            params: Vec::new(),
+            rms_after: vec![cost.sqrt()],
+            cost,
+            score,
+            termination: Termination::Converged,
+            qualitative: None,
+            qualitative_reason: String::new(),
+            error: None,
+            equivalent: Vec::new(),
+            indistinct: Vec::new(),
+            calibration: None,
+            screened: false,
+        }
+    }
+
+    #[test]
+    fn a_fit_that_raises_the_error_never_ranks_above_one_that_lowers_it() {
+        // The coupling's whitened score is the larger, but it leaves more than the model did.
+        let mut ranking = vec![
+            ranked_fit("coupling", 101.0, 1609.0),
+            ranked_fit("asymmetric", 40.0, 900.0),
+            ranked_fit("offset", 99.0, 20.0),
+        ];
+        order_ranking(&mut ranking, 10.0, 100.0);
+        let ids: Vec<&str> = ranking.iter().map(|r| r.candidate.id.as_str()).collect();
+        assert_eq!(ids, ["asymmetric", "offset", "coupling"]);
     }
 
     #[test]
