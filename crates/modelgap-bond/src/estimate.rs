@@ -181,38 +181,20 @@ pub fn missing_signals(
     outputs: &[String],
     sigma: &[f64],
 ) -> Result<Vec<MissingSignal>> {
-    let (graph, _) = model.edited(effects)?;
-    let nominal = model.run(rec, effects)?;
-    let x0 = |name: &str| nominal.state(name).and_then(|s| s.first().copied());
-    let measured: Vec<(usize, &[f64], f64)> = (outputs.iter().zip(sigma))
-        .filter_map(|(o, s)| {
-            let values = rec.signal(o)?.values.as_slice();
-            let j = nominal.output_names.iter().position(|n| n == o)?;
-            Some((j, values, *s))
-        })
-        .collect();
-    if measured.is_empty() {
-        return Ok(Vec::new());
-    }
-    let mut out = Vec::new();
-    for p in places(&graph) {
-        if let Some((m, _)) = estimate_at(
-            model, &graph, &p, rec, &x0, outputs, &measured, &nominal, false,
-        ) {
-            out.push(m);
-        }
-    }
-    Ok(out)
+    Ok(every_place(model, rec, effects, outputs, sigma, false)?
+        .into_iter()
+        .map(|(m, _)| m)
+        .collect())
 }
 
 /// The white measurement noise of each of `outputs` (σ, in its unit) that
 /// `model` (with `effects` applied) finds likeliest on `rec` when a free
 /// effort or flow acts at its place that explains most: the smoother of
 /// [`missing_signals`] with each output's noise level chosen by likelihood
-/// too (from a thousandth to a thousand times `sigma`). What a model lacking nothing
-/// but that effort would still leave: a noise floor that the signal's own fast
-/// content does not inflate. Outputs the recording lacks are left out; empty
-/// when no place can be estimated.
+/// too (from a thousandth to a thousand times `sigma`). What a model lacking
+/// nothing but that effort would still leave: a noise floor that the signal's
+/// own fast content does not inflate. Outputs the recording lacks are left
+/// out; empty when no place can be estimated.
 ///
 /// # Errors
 /// The nominal model cannot be simulated on the recording.
@@ -223,6 +205,25 @@ pub fn measurement_noise(
     outputs: &[String],
     sigma: &[f64],
 ) -> Result<Vec<(String, f64)>> {
+    let best = every_place(model, rec, effects, outputs, sigma, true)?
+        .into_iter()
+        .max_by(|a, b| a.0.explained.total_cmp(&b.0.explained));
+    Ok(best.map(|(_, noise)| noise).unwrap_or_default())
+}
+
+/// Each measured output's noise σ, by name.
+type Noise = Vec<(String, f64)>;
+
+/// Each place's estimate and the noise its smoother took ([`estimate_at`]),
+/// for the model with `effects` applied, on `rec` against `outputs`.
+fn every_place(
+    model: &BondModel,
+    rec: &Recording,
+    effects: &[(&Candidate, &[f64])],
+    outputs: &[String],
+    sigma: &[f64],
+    scan_noise: bool,
+) -> Result<Vec<(MissingSignal, Noise)>> {
     let (graph, _) = model.edited(effects)?;
     let nominal = model.run(rec, effects)?;
     let x0 = |name: &str| nominal.state(name).and_then(|s| s.first().copied());
@@ -236,15 +237,14 @@ pub fn measurement_noise(
     if measured.is_empty() {
         return Ok(Vec::new());
     }
-    let best = places(&graph)
+    Ok(places(&graph)
         .iter()
         .filter_map(|p| {
             estimate_at(
-                model, &graph, p, rec, &x0, outputs, &measured, &nominal, true,
+                model, &graph, p, rec, &x0, outputs, &measured, &nominal, scan_noise,
             )
         })
-        .max_by(|a, b| a.0.explained.total_cmp(&b.0.explained));
-    Ok(best.map(|(_, noise)| noise).unwrap_or_default())
+        .collect())
 }
 
 /// The graph with the unknown source at `p` and outputs for what acts there:
@@ -333,7 +333,7 @@ fn estimate_at(
     measured: &[(usize, &[f64], f64)],
     nominal: &crate::simulate::Run,
     scan_noise: bool,
-) -> Option<(MissingSignal, Vec<(String, f64)>)> {
+) -> Option<(MissingSignal, Noise)> {
     let (cm, acting) = augmented(graph, p)?;
     let n = cm.n_states();
     let d_slot = cm.input_names.iter().position(|i| i == UNKNOWN)?;

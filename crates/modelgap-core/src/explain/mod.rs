@@ -441,6 +441,19 @@ impl Target<'_> {
         self.residuals_of(self.model, effects, out)
     }
 
+    /// The effects of the model with `first` built in: the calibration as
+    /// fitted jointly with it (or as calibrated), then `first` itself.
+    fn with_first(&self, first: &RankedCandidate) -> Vec<(Candidate, Vec<f64>)> {
+        let calibration = (first.calibration.clone())
+            .map(|e| (e.candidate, e.values))
+            .or_else(|| (self.calibration.clone()).map(|c| (c.clone(), c.initial())));
+        let effect = first.effect();
+        calibration
+            .into_iter()
+            .chain(std::iter::once((effect.candidate, effect.values)))
+            .collect()
+    }
+
     /// Weighted residuals of `model` with `effects` into `out`.
     fn residuals_of(
         &self,
@@ -1542,14 +1555,7 @@ impl<'a> Judge<'a> {
             return Vec::new();
         }
         let target = self.target;
-        let calibration = (chosen.calibration.clone())
-            .map(|e| (e.candidate, e.values))
-            .or_else(|| (target.calibration.clone()).map(|c| (c.clone(), c.initial())));
-        let first = chosen.effect();
-        let effects: Vec<(Candidate, Vec<f64>)> = calibration
-            .into_iter()
-            .chain(std::iter::once((first.candidate, first.values)))
-            .collect();
+        let effects = target.with_first(chosen);
         let effects: Vec<(&Candidate, &[f64])> =
             effects.iter().map(|(c, v)| (c, v.as_slice())).collect();
         let sigma: Vec<f64> = self.floors.iter().map(|f| f.sigma).collect();

@@ -135,14 +135,7 @@ pub(super) fn second_effect(
 /// calibration as fitted with it) still misses an effort or flow: discovery's estimate
 /// and screen once more, on what the first effect leaves. Empty when the estimate fails.
 pub(super) fn laws_on_top(target: &Target, best: &RankedCandidate) -> Vec<Candidate> {
-    let calibration = (best.calibration.clone())
-        .map(|e| (e.candidate, e.values))
-        .or_else(|| (target.calibration.clone()).map(|c| (c.clone(), c.initial())));
-    let first = best.effect();
-    let effects: Vec<(Candidate, Vec<f64>)> = calibration
-        .into_iter()
-        .chain(std::iter::once((first.candidate, first.values)))
-        .collect();
+    let effects = target.with_first(best);
     let effects: Vec<(&Candidate, &[f64])> =
         effects.iter().map(|(c, v)| (c, v.as_slice())).collect();
     let Ok(mut missing) =
