@@ -62,11 +62,19 @@ fn assert_found(n: usize, name: &str) {
     println!("{story}");
     assert_eq!(ex.verdict, Verdict::EffectFound, "{name}:\n{story}");
     let h = &c.hidden[0];
-    // Ranked first as itself or as an exactly equivalent statement (a
-    // hanging cloth's stretch depends on compliance × mass only).
+    // Ranked first as itself or as an equivalent statement (a hanging
+    // cloth's stretch depends on compliance × mass only): exactly equivalent
+    // (the same cost to 1e-6), or named beside it as one this recording
+    // cannot tell apart (the two fits, each to the cloth's fit tolerance,
+    // land a shade apart).
     let first = &ex.ranked[0];
+    let hidden_name = (ex.ranked.iter())
+        .find(|r| r.candidate.id == h.id)
+        .map(|r| r.candidate.name.clone());
     assert!(
-        first.candidate.id == h.id || first.equivalent.contains(&h.id),
+        first.candidate.id == h.id
+            || first.equivalent.contains(&h.id)
+            || hidden_name.is_some_and(|n| first.indistinct.contains(&n)),
         "{name}: ranked first is {}\n{story}",
         first.candidate.id
     );

@@ -132,6 +132,7 @@ impl From<&PyEffectParam> for EffectParam {
             upper: p.upper,
             scale: p.scale,
             grid: 0,
+            step: 0.0,
             prior: p
                 .prior
                 .and_then(|(mean, std)| modelgap::Prior::new(mean, std)),

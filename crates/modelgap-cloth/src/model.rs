@@ -38,19 +38,21 @@
 //! | `bending@{region}` | its bending stiffness | `bending_length` (m) |
 //! | `damping@{region}` | its velocity damping | `damping` (1/s) |
 //! | `mass` | the cloth's total mass is off | `total_mass` (kg) |
-//! | `point-mass` | an extra point mass at a vertex | `col`, `row` (grid starts), `mass` (kg) |
+//! | `point-mass` | an extra point mass at a vertex | `col`, `row` (vertices: grid starts, then a lattice search), `mass` (kg) |
 //! | `friction@collider{k}` | friction on collider k is off | `friction` (1) |
 //!
 //! `wind` fits the drag coefficient too when the scene has no drag.
 //! `skin-friction` starts from 0, 2.5 and 5: from 0 alone the fit stayed at 0 on a
 //! curtain sliding in its own plane (hidden `C_f = 0.5`, 12 × 12) and explain chose
 //! damping first; from three starts it finds 0.504. The
-//! point mass sits at the vertex nearest to `(col, row)`: the place is
-//! chosen by the grid of starts (4 × 4 places spread over the grid, each
-//! scored with its best mass) and the fit refines the mass; `fix` writes it
-//! as a `[[point_masses]]` entry. (A mass split bilinearly over the four
-//! vertices around a fractional place makes the cost kinked at every
-//! vertex, and the fit stalls beside the true one.) Bounds keep the
+//! point mass sits at a vertex `(col, row)`, two parameters on the lattice of
+//! vertices ([`EffectParam::step`]): the grid of starts (4 × 4 places spread
+//! over the grid, each scored with its best mass) picks the region, the fit
+//! refines the mass, and a compass search moves the place vertex by vertex
+//! while the error falls; `fix` writes it as a `[[point_masses]]` entry. (A
+//! mass split bilinearly over the four vertices around a fractional place
+//! makes the cost kinked at every vertex, and the fit stalls beside the true
+//! one.) Bounds keep the
 //! explicit forces stable at the scene's step (damping `c h ≤ 0.2`,
 //! bend springs `k h²/m ≤ 0.25`); quadratic bending is implicit, and its
 //! bound is physics: its parameter is the cloth's bending length
@@ -110,6 +112,14 @@ pub const SPREAD_ENVELOPE: usize = 10;
 
 /// Largest damping rate × step of the `damping` candidate (dimensionless).
 const MAX_DAMPING_STEP: f64 = 0.2;
+
+/// The finite-difference step of a fit, as a fraction of each parameter's
+/// scale ([`Model::fd_step`]): a stretch solved to 1e-4 scatters the markers by
+/// about a micrometre from run to run of nearby parameters, and a compliance
+/// moved by 1e-4 of its scale (1 % stretch under a column's weight) moves
+/// them less than that — the fit of a hidden 3e-3 m/N stayed at its start of
+/// 0 on the curtain. A twentieth of the scale moves them well above it.
+const FD_STEP: f64 = 0.05;
 
 /// Largest bending stiffness × step² / particle mass of the `bend-springs` candidate.
 const MAX_BEND_STEP: f64 = 0.25;
@@ -740,8 +750,12 @@ pub fn candidates(scene: &Scene) -> Vec<Candidate> {
         )],
     });
     let (nx, nz) = (scene.cloth.nx, scene.cloth.nz);
-    let col = EffectParam::new("col", "1", 0.0, (0.0, (nx - 1) as f64), 1.0).with_grid(nx.min(4));
-    let row = EffectParam::new("row", "1", 0.0, (0.0, (nz - 1) as f64), 1.0).with_grid(nz.min(4));
+    let col = EffectParam::new("col", "1", 0.0, (0.0, (nx - 1) as f64), 1.0)
+        .with_grid(nx.min(4))
+        .with_step(1.0);
+    let row = EffectParam::new("row", "1", 0.0, (0.0, (nz - 1) as f64), 1.0)
+        .with_grid(nz.min(4))
+        .with_step(1.0);
     out.push(Candidate {
         id: "point-mass".into(),
         name: "an extra point mass at a vertex".into(),
@@ -1015,6 +1029,10 @@ impl Model for ClothModel {
     /// this halved explain's time, 178 → 80 s, with C_d still within 0.1 %).
     fn fit_tolerances(&self) -> Option<(f64, f64)> {
         Some((1e-6, 1e-4))
+    }
+
+    fn fd_step(&self) -> Option<f64> {
+        Some(FD_STEP)
     }
 
     fn with_effects(&self, effects: &[Effect]) -> modelgap_core::Result<Box<dyn Model>> {

@@ -60,6 +60,14 @@ pub struct EffectParam {
     /// count.
     #[serde(default)]
     pub grid: usize,
+    /// The lattice a discrete parameter lives on (a vertex's column, a
+    /// harmonic's order): its values are `lower + k · step`. 0 (the default)
+    /// for a continuous parameter. A fit holds a discrete parameter while it
+    /// fits the others, then moves it by whole steps while that lowers the
+    /// error (a compass search from half its grid's spacing down to one
+    /// step); it is given no ± (the lattice point is the answer).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub step: f64,
     /// What is known of the value before the data: a Gaussian prior that a
     /// calibration weighs against the recording (see [`crate::calibrate()`]);
     /// `None` (the default): only the bounds.
@@ -84,6 +92,10 @@ impl Prior {
     pub fn new(mean: f64, std: f64) -> Option<Prior> {
         (mean.is_finite() && std.is_finite() && std > 0.0).then_some(Prior { mean, std })
     }
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 impl EffectParam {
@@ -111,6 +123,7 @@ impl EffectParam {
             upper: bounds.1,
             scale,
             grid: 0,
+            step: 0.0,
             prior: None,
         }
     }
@@ -121,6 +134,18 @@ impl EffectParam {
     pub fn with_grid(mut self, grid: usize) -> EffectParam {
         self.grid = grid;
         self
+    }
+
+    /// The same parameter on a lattice of `step` (see [`EffectParam::step`]).
+    #[must_use]
+    pub fn with_step(mut self, step: f64) -> EffectParam {
+        self.step = step;
+        self
+    }
+
+    /// Whether the parameter lives on a lattice (see [`EffectParam::step`]).
+    pub fn is_discrete(&self) -> bool {
+        self.step > 0.0
     }
 
     /// The same parameter with a Gaussian prior (see [`EffectParam::prior`]).

@@ -239,6 +239,19 @@ pub trait Model: Send + Sync {
         None
     }
 
+    /// The finite-difference step a fit should take in each parameter, as a
+    /// fraction of its scale ([`EffectParam::scale`](crate::EffectParam)),
+    /// when the model's predictions are only as exact as an iterative
+    /// solver's tolerance: a step must move the prediction well above the
+    /// solver's own scatter, or the Jacobian is that scatter (a cloth solved
+    /// to 1e-4 stretch: a compliance moved by 1e-4 of its scale changes the
+    /// markers less than the solver's stopping point does, and the fit stays
+    /// at its start of 0). `None` (the default): the fitter's and screen's
+    /// own steps (1e-4 and 1e-3 of the scale).
+    fn fd_step(&self) -> Option<f64> {
+        None
+    }
+
     /// How the loop's results read for this model: text, JSON and the report. The default
     /// reads them output by output ([`crate::story::PerOutput`]).
     fn story(&self) -> &dyn crate::story::Story {

@@ -5,6 +5,7 @@
 //! it. Ranking and the verdict are in [`super`] and [`crate::judge`].
 
 use super::*;
+use crate::effect::EffectParam;
 
 /// The most steps a fit made on the model for fitting goes on for on the model
 /// as given, when the two disagree at its end ([`checked_on_the_model_as_given`]).
@@ -131,7 +132,7 @@ pub(super) fn fit_pair(
         first.params.iter().chain(&second.params).collect();
     let bounds: Vec<(f64, f64)> = params.iter().map(|p| (p.lower, p.upper)).collect();
     let scales: Vec<f64> = params.iter().map(|p| p.scale).collect();
-    let mut fit_opts = fit_options(target.model, opts);
+    let mut fit_opts = fit_options_for(target.model, opts, &scales);
     fit_opts.name = format!("{} + {}", first.name, second.name);
     let report = fit(
         &problem,
@@ -296,6 +297,7 @@ pub(super) struct Fitted {
 
 /// Where the confirming fit of a candidate starts, and what the screen
 /// predicts there.
+#[derive(Clone)]
 pub(super) struct Start {
     /// The full parameter vector the screen started from (the best grid point; the
     /// calibration's at their calibrated values): where the confirming fit starts.
@@ -360,16 +362,20 @@ pub(super) fn screen_candidate(
             for (a, (i, pts)) in grid_axes.iter().enumerate() {
                 fixed[*i] = Some(pts[combo[a]]);
             }
-            // The calibration's parameters held where calibration put them.
-            for (i, p) in c.params.iter().enumerate().skip(own) {
-                fixed[i] = Some(p.initial);
+            // The calibration's parameters held where calibration put them, and a lattice
+            // parameter off the grid at its start (a gradient cannot move it).
+            for (i, p) in c.params.iter().enumerate() {
+                if i >= own || (p.is_discrete() && fixed[i].is_none()) {
+                    fixed[i] = Some(p.initial);
+                }
             }
             let problem = CandidateProblem::new(target, base, c, fixed);
             let free_idx: Vec<usize> = (0..c.params.len())
                 .filter(|i| problem.fixed[*i].is_none())
                 .collect();
             let x0: Vec<f64> = free_idx.iter().map(|&i| c.params[i].initial).collect();
-            let steps: Vec<f64> = free_idx.iter().map(|&i| GRID_FD_STEP * scales[i]).collect();
+            let fd = screen_fd_step(target.model);
+            let steps: Vec<f64> = free_idx.iter().map(|&i| fd * scales[i]).collect();
             let b: Vec<(f64, f64)> = free_idx.iter().map(|&i| bounds[i]).collect();
             let (cost, free, mut predicted) = linearised_step(&problem, &x0, &steps, &b)?;
             predicted.truncate(target.n_residuals());
@@ -381,7 +387,7 @@ pub(super) fn screen_candidate(
             })
         })
         .collect();
-    scored
+    let best = scored
         .into_iter()
         .min_by(|a, b| a.cost.total_cmp(&b.cost))
         .ok_or_else(|| {
@@ -390,7 +396,34 @@ pub(super) fn screen_candidate(
             } else {
                 "no grid start could be simulated".to_string()
             }
-        })
+        })?;
+    // When the grid holds every one of the candidate's own parameters, the grid point alone
+    // would be its size (a skin friction scored at 0, 2.5 and 5 only, never at the 0.5 a
+    // curtain shows): its continuous ones take the linearised step from the best point.
+    let stepped: Vec<usize> = (0..own).filter(|&i| !c.params[i].is_discrete()).collect();
+    if stepped.is_empty() || (0..own).any(|i| !c.params[i].is_discrete() && c.params[i].grid == 0) {
+        return Ok(best);
+    }
+    let fixed: Vec<Option<f64>> = (0..c.params.len())
+        .map(|i| (!stepped.contains(&i)).then_some(best.from[i]))
+        .collect();
+    let problem = CandidateProblem::new(target, base, c, fixed);
+    let x0: Vec<f64> = stepped.iter().map(|&i| best.from[i]).collect();
+    let fd = screen_fd_step(target.model);
+    let steps: Vec<f64> = stepped.iter().map(|&i| fd * scales[i]).collect();
+    let b: Vec<(f64, f64)> = stepped.iter().map(|&i| bounds[i]).collect();
+    match linearised_step(&problem, &x0, &steps, &b) {
+        Some((cost, free, mut predicted)) if cost < best.cost => {
+            predicted.truncate(target.n_residuals());
+            Ok(Start {
+                x: problem.full(&free),
+                cost,
+                predicted,
+                ..best
+            })
+        }
+        _ => Ok(best),
+    }
 }
 
 /// Fits one candidate on top of `base`: its screen, then a local fit of
@@ -444,36 +477,190 @@ pub(super) fn confirm(
     start: &[f64],
     opts: &ExplainOptions,
 ) -> Fitted {
-    let mut fit_opts = fit_options(target.model, opts);
+    if c.params.iter().any(EffectParam::is_discrete) {
+        return confirm_on_lattice(target, base, c, start, opts);
+    }
+    match fit_held(target, base, c, start, &[], opts) {
+        Ok((report, weighted)) => confirmed(target, c, report, weighted),
+        Err(e) => failed_fit(c, e.to_string()),
+    }
+}
+
+/// A candidate confirmed by a fit: its report and weighted residual (the data's rows only:
+/// the priors' are part of the fit, not of the residual).
+fn confirmed(target: &Target, c: &Candidate, report: FitReport, mut weighted: Vec<f64>) -> Fitted {
+    weighted.truncate(target.n_residuals());
+    Fitted {
+        candidate: c.clone(),
+        values: report.params.clone(),
+        cost: report.cost_after,
+        report: Some(report),
+        weighted,
+        error: None,
+        screened: false,
+    }
+}
+
+/// The most rounds of moves and refits a lattice search makes.
+const LATTICE_ROUNDS: usize = 6;
+
+/// The confirming fit of a candidate with discrete parameters
+/// ([`EffectParam::step`]): the continuous ones fitted by simulation error
+/// with the discrete held, then a compass search on the lattice — each
+/// discrete parameter moved by a stride of whole steps either way, with the
+/// continuous held, while a move lowers the error, the stride halved from
+/// about half its grid's spacing down to one step — and the continuous ones
+/// fitted again where it stopped, until no move lowers the error. A gradient
+/// cannot place a lattice parameter (the error is flat between its points).
+fn confirm_on_lattice(
+    target: &Target,
+    base: &[Effect],
+    c: &Candidate,
+    start: &[f64],
+    opts: &ExplainOptions,
+) -> Fitted {
+    let on_lattice = |i: usize, v: f64| {
+        let p = &c.params[i];
+        let top = ((p.upper - p.lower) / p.step).floor();
+        p.lower + ((v - p.lower) / p.step).round().clamp(0.0, top) * p.step
+    };
+    let discrete: Vec<usize> = (0..c.params.len())
+        .filter(|&i| c.params[i].is_discrete())
+        .collect();
+    let mut x: Vec<f64> = start.to_vec();
+    for &i in &discrete {
+        x[i] = on_lattice(i, x[i]);
+    }
+    // The widest stride: a power of two about half the grid's spacing, in steps.
+    let widest = (discrete.iter())
+        .map(|&i| {
+            let p = &c.params[i];
+            let spacing = (p.upper - p.lower) / (p.grid.max(2) - 1) as f64;
+            (0.5 * spacing / p.step).max(1.0).log2().floor().exp2()
+        })
+        .fold(1.0, f64::max);
+    let fit_at = |x: &[f64]| fit_held(target, base, c, x, &discrete, opts);
+    let mut fitted = match fit_at(&x) {
+        Ok(f) => f,
+        Err(e) => return failed_fit(c, e.to_string()),
+    };
+    let held_cost = |x: &[f64]| {
+        let problem = CandidateProblem::new(target, base, c, x.iter().map(|v| Some(*v)).collect());
+        let mut r = vec![0.0; problem.n_residuals()];
+        match problem.residuals(&[], &mut r) {
+            Ok(()) if r.iter().all(|v| v.is_finite()) => 0.5 * r.iter().map(|v| v * v).sum::<f64>(),
+            _ => f64::INFINITY,
+        }
+    };
+    for _ in 0..LATTICE_ROUNDS {
+        if opts.cancel.as_deref().is_some_and(Cancel::is_cancelled) {
+            break;
+        }
+        let mut x = fitted.0.params.clone();
+        let mut cost = fitted.0.cost_after;
+        let mut moved = false;
+        let mut stride = widest;
+        while stride >= 1.0 {
+            // Every move of this stride, scored in parallel; the best taken while it helps.
+            let moves: Vec<Vec<f64>> = (discrete.iter())
+                .flat_map(|&i| [-1.0, 1.0].map(|dir| (i, dir)))
+                .filter_map(|(i, dir)| {
+                    let v = on_lattice(i, x[i] + dir * stride * c.params[i].step);
+                    (v != x[i]).then(|| {
+                        let mut y = x.clone();
+                        y[i] = v;
+                        y
+                    })
+                })
+                .collect();
+            let best = (moves.into_par_iter())
+                .map(|y| (held_cost(&y), y))
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            match best {
+                Some((cy, y)) if cy < cost => {
+                    (x, cost, moved) = (y, cy, true);
+                }
+                _ => stride *= 0.5,
+            }
+        }
+        if !moved {
+            break;
+        }
+        match fit_at(&x) {
+            Ok(f) if f.0.cost_after < fitted.0.cost_after => fitted = f,
+            _ => break,
+        }
+    }
+    let (report, weighted) = fitted;
+    confirmed(target, c, report, weighted)
+}
+
+/// A fit of `c`'s parameters from `x` with those in `held` held at their
+/// values there: its report over every parameter (a held one has no ±) and
+/// the weighted residual on the model as given.
+fn fit_held(
+    target: &Target,
+    base: &[Effect],
+    c: &Candidate,
+    x: &[f64],
+    held: &[usize],
+    opts: &ExplainOptions,
+) -> Result<(FitReport, Vec<f64>)> {
+    let fixed: Vec<Option<f64>> = (0..x.len())
+        .map(|i| held.contains(&i).then_some(x[i]))
+        .collect();
+    let free: Vec<usize> = (0..x.len()).filter(|i| !held.contains(i)).collect();
+    let bounds: Vec<(f64, f64)> = (free.iter())
+        .map(|&i| (c.params[i].lower, c.params[i].upper))
+        .collect();
+    let scales: Vec<f64> = free.iter().map(|&i| c.params[i].scale).collect();
+    let mut fit_opts = fit_options_for(target.model, opts, &scales);
     fit_opts.name = c.name.clone();
-    let cancel = opts.cancel.as_deref();
-    let bounds: Vec<(f64, f64)> = c.params.iter().map(|p| (p.lower, p.upper)).collect();
-    let scales: Vec<f64> = c.params.iter().map(|p| p.scale).collect();
-    let problem = CandidateProblem::new(target, base, c, vec![None; c.params.len()]);
-    let res = fit(&problem, start, &bounds, &scales, &fit_opts, cancel);
+    let x0: Vec<f64> = free.iter().map(|&i| x[i]).collect();
+    let problem = CandidateProblem::new(target, base, c, fixed);
+    let report = fit(
+        &problem,
+        &x0,
+        &bounds,
+        &scales,
+        &fit_opts,
+        opts.cancel.as_deref(),
+    )?;
     let checked = CandidateProblem {
         model: target.accurate.unwrap_or(target.model),
         ..problem
     };
-    let res = res.and_then(|report| {
-        checked_on_the_model_as_given(target, &checked, report, &bounds, &scales, &fit_opts, opts)
-    });
-    match res {
-        Ok((report, mut weighted)) => {
-            // The data's rows only: the priors' are part of the fit, not of the residual.
-            weighted.truncate(target.n_residuals());
-            Fitted {
-                candidate: c.clone(),
-                values: report.params.clone(),
-                cost: report.cost_after,
-                report: Some(report),
-                weighted,
-                error: None,
-                screened: false,
-            }
-        }
-        Err(e) => failed_fit(c, e.to_string()),
-    }
+    let (report, weighted) =
+        checked_on_the_model_as_given(target, &checked, report, &bounds, &scales, &fit_opts, opts)?;
+    // The report over every parameter: the held ones at their values, with no ±.
+    let n = x.len();
+    let slot = |i: usize| free.iter().position(|&f| f == i);
+    let params = (0..n)
+        .map(|i| slot(i).map_or(x[i], |k| report.params[k]))
+        .collect();
+    let std_errors = (0..n)
+        .map(|i| slot(i).map_or(f64::INFINITY, |k| report.std_errors[k]))
+        .collect();
+    let correlation = (0..n)
+        .map(|i| {
+            (0..n)
+                .map(|j| match (slot(i), slot(j)) {
+                    (Some(a), Some(b)) => report.correlation[a][b],
+                    _ if i == j => 1.0,
+                    _ => 0.0,
+                })
+                .collect()
+        })
+        .collect();
+    Ok((
+        FitReport {
+            params,
+            std_errors,
+            correlation,
+            ..report
+        },
+        weighted,
+    ))
 }
 
 pub(super) fn failed_clone(f: &Fitted) -> Fitted {

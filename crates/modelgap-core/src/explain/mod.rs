@@ -70,6 +70,9 @@ const PAIR_FIRSTS: usize = 3;
 /// The screen sends this many of its best candidates (and every law found) on to be
 /// confirmed by a fit; the rest keep the screen's estimate.
 const CONFIRM: usize = 6;
+/// Of those, a candidate is confirmed only when the screen says it removes at least this
+/// share of what the best removes (the screen's best, then the best confirmed fit's).
+const CONFIRM_SHARE: f64 = 0.25;
 /// Second effects confirmed on top of each first, the best of their screen.
 const PAIR_CONFIRM: usize = 3;
 /// The second effect is sought among this many of the best singles (and every law found).
@@ -872,41 +875,68 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         .filter(|p| p.law.is_some())
         .map(|p| p.location.as_str())
         .collect();
-    let confirmed: Vec<bool> = (0..screens.len())
-        .map(|i| {
-            screens[i].0.id.starts_with("law@")
-                || failing.contains(&screens[i].0.acts_on.as_str())
-                || screens[i].1.is_err()
-                || order
-                    .iter()
-                    .position(|&o| o == i)
-                    .is_some_and(|r| r < CONFIRM)
-        })
+    // A candidate whose screened gain is a small share of the best's cannot come first:
+    // it keeps the screen's estimate (a second round below confirms it after all when the
+    // best fits fall short of their screens).
+    let gain = |i: usize| cost_before - screen_cost(i);
+    let best_screened = order.first().map_or(0.0, |&i| gain(i));
+    let worth = |i: usize, reference: f64| gain(i) >= CONFIRM_SHARE * reference;
+    let always = |i: usize| {
+        screens[i].0.id.starts_with("law@")
+            || failing.contains(&screens[i].0.acts_on.as_str())
+            || screens[i].1.is_err()
+    };
+    let top = |i: usize| {
+        order
+            .iter()
+            .position(|&o| o == i)
+            .is_some_and(|r| r < CONFIRM)
+    };
+    let mut confirmed: Vec<bool> = (0..screens.len())
+        .map(|i| always(i) || (top(i) && worth(i, best_screened)))
         .collect();
-    let total = confirmed.iter().filter(|c| **c).count();
+    let mut total = confirmed.iter().filter(|c| **c).count();
     clock.lap("screen-menu");
-    let fitted: Vec<(Fitted, bool)> = screens
+    let fit_one = |i: usize, confirm_it: bool, total: usize| -> (Fitted, bool) {
+        let (c, start) = &screens[i];
+        let f = match start {
+            Err(e) => failed_fit(c, e.clone()),
+            Ok(start) if !confirm_it => return (screened_fit(c, start.clone()), true),
+            Ok(start) => confirm(&target, &[], c, &start.from, opts),
+        };
+        // A fit stopped by the flag (or whose grid was) did not finish.
+        let stopped = f
+            .report
+            .as_ref()
+            .is_some_and(|r| r.termination == Termination::Cancelled)
+            || (f.error.is_some() && cancelled());
+        let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+        if let Some(p) = &opts.progress {
+            p(d, total);
+        }
+        (f, !stopped)
+    };
+    let mut fitted: Vec<(Fitted, bool)> = (0..screens.len())
         .into_par_iter()
-        .zip(confirmed)
-        .map(|((c, start), confirm_it)| {
-            let f = match start {
-                Err(e) => failed_fit(&c, e),
-                Ok(start) if !confirm_it => return (screened_fit(&c, start), true),
-                Ok(start) => confirm(&target, &[], &c, &start.from, opts),
-            };
-            // A fit stopped by the flag (or whose grid was) did not finish.
-            let stopped = f
-                .report
-                .as_ref()
-                .is_some_and(|r| r.termination == Termination::Cancelled)
-                || (f.error.is_some() && cancelled());
-            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-            if let Some(p) = &opts.progress {
-                p(d, total);
-            }
-            (f, !stopped)
-        })
+        .map(|i| fit_one(i, confirmed[i], total))
         .collect();
+    // The second round: what the screen left out that the best confirmed fit's own gain
+    // (lower than its screen's, when the linearised step oversized it) makes worth a fit.
+    let best_fitted = (fitted.iter())
+        .filter(|(f, _)| !f.screened && f.error.is_none())
+        .map(|(f, _)| cost_before - f.cost)
+        .fold(0.0, f64::max);
+    let again: Vec<usize> = (0..screens.len())
+        .filter(|&i| !confirmed[i] && top(i) && worth(i, best_fitted))
+        .collect();
+    total += again.len();
+    let refitted: Vec<(usize, (Fitted, bool))> = (again.par_iter())
+        .map(|&i| (i, fit_one(i, true, total)))
+        .collect();
+    for (i, f) in refitted {
+        confirmed[i] = true;
+        fitted[i] = f;
+    }
     let interrupted = cancelled();
     clock.lap("confirm");
     let fitted: Vec<Fitted> = fitted
@@ -1628,6 +1658,25 @@ fn fit_options(model: &dyn Model, opts: &ExplainOptions) -> FitOptions {
     fit
 }
 
+/// [`fit_options`] for parameters of these `scales`: with the model's own
+/// finite-difference steps ([`Model::fd_step`]) when it has them and the
+/// options do not set them.
+fn fit_options_for(model: &dyn Model, opts: &ExplainOptions, scales: &[f64]) -> FitOptions {
+    let mut fit = fit_options(model, opts);
+    if let (None, Some(step)) = (&fit.fd_steps, model.fd_step()) {
+        fit.fd_steps = Some(scales.iter().map(|s| step * s).collect());
+    }
+    fit
+}
+
+/// The screen's finite-difference step as a fraction of a parameter's scale:
+/// [`GRID_FD_STEP`], or the model's own when larger ([`Model::fd_step`]).
+fn screen_fd_step(model: &dyn Model) -> f64 {
+    model
+        .fd_step()
+        .map_or(GRID_FD_STEP, |s| s.max(GRID_FD_STEP))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1647,6 +1696,7 @@ mod tests {
             upper: 10.0,
             scale,
             grid: 0,
+            step: 0.0,
             prior: None,
         }
     }
@@ -1875,7 +1925,12 @@ mod tests {
         let ex = pool.install(|| explain(&Toy, &rec, &opts)).unwrap();
         assert_eq!(ex.verdict, Verdict::Interrupted);
         assert!(ex.chosen.is_empty());
-        assert!(ex.ranked.len() <= 1, "{:?}", ex.ranked);
+        // At most the one finished fit, beside what the screen alone sized (and says so).
+        assert!(
+            ex.ranked.iter().filter(|r| !r.screened).count() <= 1,
+            "{:?}",
+            ex.ranked
+        );
         assert!(
             ex.ranked
                 .iter()
@@ -1910,5 +1965,67 @@ mod tests {
         let all_high = vec![1.4; 30];
         assert!(!at_noise_floor(&all_high, &[1.0; 30], 1.3));
         assert!(!at_noise_floor(&[f64::NAN; 5], &[1.0; 5], 1.3));
+    }
+
+    /// y = sin(2π t) with one candidate: a bump `h exp(-((t - c)/0.2)²)` whose place `c`
+    /// lives on a lattice of 0.05 s (a gradient cannot move it).
+    struct Bumpy;
+
+    impl Model for Bumpy {
+        fn name(&self) -> String {
+            "bumpy".into()
+        }
+        fn outputs(&self) -> Vec<String> {
+            vec!["y".into()]
+        }
+        fn predict_with(
+            &self,
+            rec: &Recording,
+            effects: &[(&Candidate, &[f64])],
+        ) -> Result<Prediction> {
+            let y = (rec.t().iter())
+                .map(|&t| {
+                    let bump: f64 = (effects.iter())
+                        .map(|(_, v)| v[1] * (-((t - v[0]) / 0.2).powi(2)).exp())
+                        .sum();
+                    (2.0 * std::f64::consts::PI * t).sin() + bump
+                })
+                .collect();
+            Ok(Prediction {
+                names: vec!["y".into()],
+                values: vec![y],
+            })
+        }
+        fn candidates(&self) -> Vec<Candidate> {
+            vec![Candidate {
+                id: "bump".into(),
+                name: "a bump".into(),
+                kind: EffectKind::MissingElement,
+                acts_on: "y".into(),
+                params: vec![
+                    EffectParam::new("c", "s", 0.0, (0.0, 1.95), 0.05)
+                        .with_grid(4)
+                        .with_step(0.05),
+                    EffectParam::new("h", "1", 0.0, (-10.0, 10.0), 0.1),
+                ],
+            }]
+        }
+        fn with_effects(&self, _effects: &[Effect]) -> Result<Box<dyn Model>> {
+            Ok(Box::new(Bumpy))
+        }
+    }
+
+    #[test]
+    fn a_lattice_parameter_is_found_by_the_compass_search() {
+        // The grid's starts lie at 0, 0.65, 1.3 and 1.95 s; the bump sits at 1.45 s, two
+        // lattice steps from the nearest start.
+        let rec = recording(|t| 0.5 * (-((t - 1.45) / 0.2).powi(2)).exp(), 0.01, 0.0, 3);
+        let ex = explain(&Bumpy, &rec, &ExplainOptions::default()).unwrap();
+        assert_eq!(ex.verdict, Verdict::EffectFound, "{:?}", ex.reasons);
+        let p = &ex.chosen[0].params;
+        assert!((p[0].value - 1.45).abs() < 1e-9, "{}", p[0].value);
+        assert!(p[0].std_error.is_infinite(), "a lattice point has no ±");
+        assert!((p[1].value - 0.5).abs() < 0.01, "{}", p[1].value);
+        assert!(p[1].std_error.is_finite());
     }
 }

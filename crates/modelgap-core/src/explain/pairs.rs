@@ -101,11 +101,31 @@ pub(super) fn second_effect(
         let law = second.candidate.id.starts_with("law@") || first.candidate.id.starts_with("law@");
         gain - if law { opts.significance } else { 0.0 }
     };
-    let (joint_first, second, gain) = pairs
+    let valid: Vec<(&Fitted, &Fitted, f64)> = pairs
         .iter()
         .filter(|(a, b)| a.error.is_none() && b.error.is_none())
         .map(|(a, b)| (a, b, gain_of(a, b)))
+        .collect();
+    let (_, best_second, _) = *valid
+        .iter()
         .max_by(|x, y| preference(x.1, x.2).total_cmp(&preference(y.1, y.2)))?;
+    // The simplest of the pairs that leave the same (a wind fitted at 0.01 m/s beside the
+    // drag it carries is still air): fewest parameters, then the most evidence.
+    let reference_cost = 0.5 * reference.iter().map(|r| r * r).sum::<f64>();
+    let best_cost = best_second.cost;
+    let alike =
+        |f: &Fitted| f.cost - best_cost <= SAME_EXPLANATION * (reference_cost - best_cost).max(0.0);
+    // A named effect before a discovered law, then the fewest parameters.
+    let k = |f: &Fitted| (f.candidate.id.starts_with("law@"), f.candidate.params.len());
+    let (joint_first, second, gain) = valid
+        .iter()
+        .filter(|(_, b, _)| alike(b))
+        .min_by(|x, y| {
+            k(x.1)
+                .cmp(&k(y.1))
+                .then(preference(y.1, y.2).total_cmp(&preference(x.1, x.2)))
+        })
+        .copied()?;
     let n_eff2 = target.n_eff(&joint_first.weighted);
     let rhos2 = target.rhos(&joint_first.weighted);
     if gain <= opts.significance {
