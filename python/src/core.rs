@@ -52,6 +52,14 @@ fn from_state<T: serde::de::DeserializeOwned>(state: &str, what: &str) -> PyResu
 }
 
 /// Failure windows as `(start, end, peak)` tuples (s, s, signal unit).
+/// A floor kind as Python and JSON name it (`quiet-band`).
+fn floor_kind_name(kind: modelgap::compare::FloorKind) -> String {
+    serde_json::to_value(kind)
+        .ok()
+        .and_then(|v| v.as_str().map(str::to_owned))
+        .unwrap_or_default()
+}
+
 fn windows(w: &[FailureWindow]) -> Vec<(f64, f64, f64)> {
     w.iter().map(|w| (w.start, w.end, w.peak)).collect()
 }
@@ -285,10 +293,7 @@ impl PyOutputComparison {
     /// high) or ``"unchecked"``.
     #[getter]
     fn noise_method(&self) -> String {
-        serde_json::to_value(self.inner.noise_method)
-            .ok()
-            .and_then(|v| v.as_str().map(str::to_owned))
-            .unwrap_or_default()
+        floor_kind_name(self.inner.noise_method)
     }
     /// RMS over the noise floor: about 1 for a right model.
     #[getter]
@@ -679,10 +684,7 @@ impl PyOutputSummary {
     /// noise the model leaves with a free effort at the place that explains most).
     #[getter]
     fn noise_method(&self) -> String {
-        serde_json::to_value(self.inner.noise_method)
-            .ok()
-            .and_then(|v| v.as_str().map(str::to_owned))
-            .unwrap_or_default()
+        floor_kind_name(self.inner.noise_method)
     }
     /// RMS of the model as given.
     #[getter]

@@ -12,6 +12,7 @@ use crate::effect::EffectParam;
 const CHECK_ITERATIONS: usize = 10;
 
 /// A fit of one candidate on top of fixed effects; `fixed[i]` pins parameter i.
+#[derive(Clone)]
 pub(super) struct CandidateProblem<'a> {
     target: &'a Target<'a>,
     /// The model simulated: the target's model for fitting, or the model as given.
@@ -88,6 +89,7 @@ impl ResidualProblem for CandidateProblem<'_> {
 
 /// A joint fit of two candidates (on top of nothing else): the parameters
 /// of `first` then those of `second`.
+#[derive(Clone, Copy)]
 pub(super) struct PairProblem<'a> {
     target: &'a Target<'a>,
     /// The model simulated: the target's model for fitting, or the model as given.
@@ -132,21 +134,42 @@ pub(super) fn fit_pair(
         first.params.iter().chain(&second.params).collect();
     let bounds: Vec<(f64, f64)> = params.iter().map(|p| (p.lower, p.upper)).collect();
     let scales: Vec<f64> = params.iter().map(|p| p.scale).collect();
-    let mut fit_opts = fit_options_for(target.model, opts, &scales);
-    fit_opts.name = format!("{} + {}", first.name, second.name);
-    let report = fit(
-        &problem,
-        start,
-        &bounds,
-        &scales,
-        &fit_opts,
-        opts.cancel.as_deref(),
-    )?;
     let checked = PairProblem {
         model: target.accurate.unwrap_or(target.model),
         ..problem
     };
-    checked_on_the_model_as_given(target, &checked, report, &bounds, &scales, &fit_opts, opts)
+    let name = format!("{} + {}", first.name, second.name);
+    fit_and_check(
+        target, &problem, &checked, start, &bounds, &scales, name, opts,
+    )
+}
+
+/// Fits `problem` (on the target's model for fitting) from `start`, with the model's own
+/// tolerances and finite-difference steps, then holds the fit against `accurate` (the same
+/// problem on the model as given, [`checked_on_the_model_as_given`]): the report and the
+/// weighted residual there.
+#[allow(clippy::too_many_arguments)]
+fn fit_and_check(
+    target: &Target,
+    problem: &dyn ResidualProblem,
+    accurate: &dyn ResidualProblem,
+    start: &[f64],
+    bounds: &[(f64, f64)],
+    scales: &[f64],
+    name: String,
+    opts: &ExplainOptions,
+) -> Result<(FitReport, Vec<f64>)> {
+    let mut fit_opts = fit_options_for(target.model, opts, scales);
+    fit_opts.name = name;
+    let report = fit(
+        problem,
+        start,
+        bounds,
+        scales,
+        &fit_opts,
+        opts.cancel.as_deref(),
+    )?;
+    checked_on_the_model_as_given(target, accurate, report, bounds, scales, &fit_opts, opts)
 }
 
 /// A fit made on the target's model for fitting, held against the model as
@@ -557,7 +580,9 @@ fn confirm_on_lattice(
             break;
         }
         let mut x = fitted.0.params.clone();
-        let mut cost = fitted.0.cost_after;
+        // Moves are scored on the model the fits simulate; so is the point they move from
+        // (the fit's own cost is the model's as given).
+        let mut cost = held_cost(&x);
         let mut moved = false;
         let mut stride = widest;
         while stride >= 1.0 {
@@ -614,24 +639,22 @@ fn fit_held(
         .map(|&i| (c.params[i].lower, c.params[i].upper))
         .collect();
     let scales: Vec<f64> = free.iter().map(|&i| c.params[i].scale).collect();
-    let mut fit_opts = fit_options_for(target.model, opts, &scales);
-    fit_opts.name = c.name.clone();
     let x0: Vec<f64> = free.iter().map(|&i| x[i]).collect();
     let problem = CandidateProblem::new(target, base, c, fixed);
-    let report = fit(
+    let checked = CandidateProblem {
+        model: target.accurate.unwrap_or(target.model),
+        ..problem.clone()
+    };
+    let (report, weighted) = fit_and_check(
+        target,
         &problem,
+        &checked,
         &x0,
         &bounds,
         &scales,
-        &fit_opts,
-        opts.cancel.as_deref(),
+        c.name.clone(),
+        opts,
     )?;
-    let checked = CandidateProblem {
-        model: target.accurate.unwrap_or(target.model),
-        ..problem
-    };
-    let (report, weighted) =
-        checked_on_the_model_as_given(target, &checked, report, &bounds, &scales, &fit_opts, opts)?;
     // The report over every parameter: the held ones at their values, with no ±.
     let n = x.len();
     let slot = |i: usize| free.iter().position(|&f| f == i);
