@@ -95,6 +95,36 @@ fn a_driver_that_delivers_less_than_its_command_is_named() {
     assert!((0.8..0.86).contains(&k), "k = {k}\n{text}");
 }
 
+#[test]
+fn a_speed_sensor_that_clips_at_its_rails_is_named() {
+    // An ADC whose rails are not where the model's speed peaks, and not symmetric: 80 % of
+    // the largest speed above, 60 % of the most negative below (the candidate's bounds and
+    // grid are the run's largest magnitude: the rails must be found, not started on).
+    let rails = std::cell::Cell::new((0.0, 0.0));
+    let clip = |y: &[f64]| {
+        let hi = 0.8 * y.iter().copied().fold(f64::MIN, f64::max);
+        let lo = 0.6 * y.iter().copied().fold(f64::MAX, f64::min);
+        rails.set((hi, lo));
+        y.iter().map(|&x| x.clamp(lo, hi)).collect()
+    };
+    let ex = explained(&recording(MOTOR, clip));
+    let (hi, lo) = rails.get();
+    let text = modelgap::story::explanation_text(&ex, 5);
+    let best = ex.chosen.first().expect("an effect is chosen");
+    assert_eq!(best.candidate.id, "clip@omega", "{text}");
+    assert_eq!(ex.verdict, modelgap::Verdict::EffectFound, "{text}");
+    let (upper, lower) = (best.params[0].value, best.params[1].value);
+    println!("rails found {upper:.3} / {lower:.3} rad/s, hidden {hi:.3} / {lo:.3}");
+    assert!(
+        (upper / hi - 1.0).abs() < 0.05,
+        "upper {upper} vs {hi}\n{text}"
+    );
+    assert!(
+        (lower / lo - 1.0).abs() < 0.05,
+        "lower {lower} vs {lo}\n{text}"
+    );
+}
+
 /// An effect id naming a place the model does not have is a typed error that names it.
 #[test]
 fn chain_effects_on_places_the_model_lacks_are_refused() {
@@ -110,6 +140,7 @@ fn chain_effects_on_places_the_model_lacks_are_refused() {
             "no source '1m' driven by an input",
         ),
         ("offset@omega", "offset@speed", "no output 'speed'"),
+        ("clip@omega", "clip@speed", "no output 'speed'"),
         (
             "offset@omega",
             "law@shaft:c * 1",

@@ -10,8 +10,8 @@ use super::tag::Tag;
 use super::{
     ActuatorGain, ActuatorLimit, Brush, Calibration, Cogging, Coulomb, Coupling, DeadZone,
     Declared, Deviation, Factor, Fault, Faulted, Heating, Inertia, Inflow, Junction, LawEffect,
-    Leak, Load, Node, Orifice, Overflow, Saturation, SensorDelay, SensorLag, SensorOffset,
-    SensorScale, Stiffness, Store, Viscous,
+    Leak, Load, Node, Orifice, Overflow, Saturation, SensorClip, SensorDelay, SensorLag,
+    SensorOffset, SensorScale, Stiffness, Store, Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::BondGraph;
@@ -66,6 +66,8 @@ pub enum BondEffect {
     Lag(SensorLag),
     /// `offset@<output>`: a constant offset in an output's sensor.
     Offset(SensorOffset),
+    /// `clip@<output>`: a sensor that reads nothing beyond its range.
+    Clip(SensorClip),
     /// `scale@<output>`: a gain in an output's sensor.
     Scale(SensorScale),
     /// `delay@<output>`: a pure delay in an output's sensor.
@@ -121,6 +123,12 @@ impl From<ActuatorGain> for BondEffect {
 impl From<ActuatorLimit> for BondEffect {
     fn from(k: ActuatorLimit) -> BondEffect {
         BondEffect::Limit(k)
+    }
+}
+
+impl From<SensorClip> for BondEffect {
+    fn from(k: SensorClip) -> BondEffect {
+        BondEffect::Clip(k)
     }
 }
 
@@ -312,6 +320,16 @@ impl BondEffect {
                 })?;
                 Some(BondEffect::Offset(o))
             }
+            Tag::Clip => {
+                let o = SensorClip::named(g, target).ok_or_else(|| {
+                    bad(
+                        c,
+                        "",
+                        format!("the model has no output '{target}' a sensor range can clip"),
+                    )
+                })?;
+                Some(BondEffect::Clip(o))
+            }
             Tag::Scale => {
                 let o = SensorScale::named(g, target).ok_or_else(|| {
                     bad(
@@ -388,6 +406,7 @@ impl BondEffect {
             BondEffect::Limit(k) => k,
             BondEffect::Lag(k) => k,
             BondEffect::Offset(k) => k,
+            BondEffect::Clip(k) => k,
             BondEffect::Scale(k) => k,
             BondEffect::Delay(k) => k,
             BondEffect::Declared(k) => k,
@@ -423,6 +442,7 @@ impl BondEffect {
             | BondEffect::Limit(_)
             | BondEffect::Lag(_)
             | BondEffect::Offset(_)
+            | BondEffect::Clip(_)
             | BondEffect::Scale(_)
             | BondEffect::Delay(_)
             | BondEffect::Declared(_)
@@ -485,6 +505,7 @@ impl BondEffect {
             Tag::Limit => ActuatorLimit::vanishing_values(c),
             Tag::Lag => SensorLag::vanishing_values(c),
             Tag::Offset => SensorOffset::vanishing_values(c),
+            Tag::Clip => SensorClip::vanishing_values(c),
             Tag::Scale => SensorScale::vanishing_values(c),
             Tag::Delay => SensorDelay::vanishing_values(c),
             Tag::Law => LawEffect::vanishing_values(c),

@@ -8,7 +8,7 @@ use super::def::EffectDef;
 use super::scales::Scales;
 use super::{
     ActuatorGain, ActuatorLimit, Brush, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation,
-    Factor, Fault, Heating, Inertia, Inflow, Leak, Load, Orifice, Overflow, Saturation,
+    Factor, Fault, Heating, Inertia, Inflow, Leak, Load, Orifice, Overflow, Saturation, SensorClip,
     SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness, Store, Viscous,
 };
 use crate::expr::Expr;
@@ -148,6 +148,7 @@ pub fn offered(g: &BondGraph) -> Vec<BondEffect> {
     out.extend(of::<ActuatorLimit>(g));
     out.extend(of::<SensorLag>(g));
     out.extend(of::<SensorOffset>(g));
+    out.extend(of::<SensorClip>(g));
     out.extend(of::<SensorScale>(g));
     out.extend(of::<SensorDelay>(g));
     out.extend(of::<Declared>(g));

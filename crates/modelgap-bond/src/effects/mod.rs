@@ -63,7 +63,8 @@
 //!   [`gain`](ActuatorGain) (the actuator delivers `k` times its command) and
 //!   [`limit`](ActuatorLimit) (it saturates at `±v_max`);
 //! - on every output: [`lag`](SensorLag) (a first-order lag in its sensor) and
-//!   [`offset`](SensorOffset) (a constant added to its reading) and
+//!   [`offset`](SensorOffset) (a constant added to its reading),
+//!   [`clip`](SensorClip) (it reads nothing beyond `[lower, upper]`) and
 //!   [`scale`](SensorScale) (its reading `k` times the value) and
 //!   [`delay`](SensorDelay) (it reports late, any fraction of a sample);
 //! - declared by the model file (`[[candidates]]`): [`declared`](Declared);
@@ -81,6 +82,7 @@
 mod bond_effect;
 mod brush;
 mod calibration;
+mod clip;
 mod cogging;
 mod coulomb;
 mod coupling;
@@ -125,6 +127,7 @@ use crate::simulate::ParamChange;
 pub use bond_effect::BondEffect;
 pub use brush::Brush;
 pub use calibration::Calibration;
+pub use clip::SensorClip;
 pub use cogging::Cogging;
 pub(crate) use cogging::is_periodic;
 pub use coulomb::Coulomb;

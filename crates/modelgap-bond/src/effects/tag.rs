@@ -29,6 +29,7 @@ pub(super) enum Tag {
     Limit,
     Lag,
     Offset,
+    Clip,
     Scale,
     Delay,
     Declared,
@@ -37,7 +38,7 @@ pub(super) enum Tag {
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 27] = [
+const PREFIXES: [(Tag, &str); 28] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -60,6 +61,7 @@ const PREFIXES: [(Tag, &str); 27] = [
     (Tag::Limit, "limit@"),
     (Tag::Lag, "lag@"),
     (Tag::Offset, "offset@"),
+    (Tag::Clip, "clip@"),
     (Tag::Scale, "scale@"),
     (Tag::Delay, "delay@"),
     (Tag::Declared, "declared:"),
@@ -123,7 +125,7 @@ mod tests {
     fn the_expected_prefixes_read_as_a_list() {
         assert_eq!(
             Tag::expected(),
-            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@, gain@, limit@, lag@, offset@, scale@, delay@, declared: or law@"
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@, gain@, limit@, lag@, offset@, clip@, scale@, delay@, declared: or law@"
         );
     }
 }
