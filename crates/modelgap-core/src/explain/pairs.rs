@@ -42,11 +42,6 @@ pub(super) fn second_effect(
         .collect();
     screened.sort_by(|a, b| a.0.total_cmp(&b.0));
     screened.truncate(PAIR_CONFIRM);
-    // As for single effects: a second the screen gives less than a quarter of the best
-    // second's gain is not fitted jointly.
-    if let Some(top) = screened.first().map(|s| best.cost - s.0) {
-        screened.retain(|s| best.cost - s.0 >= CONFIRM_SHARE * top);
-    }
     let pairs: Vec<(Fitted, Fitted)> = screened
         .into_par_iter()
         .map(|(_, c, start)| {
