@@ -17,6 +17,11 @@ use crate::expr::{Expr, Func};
 use crate::graph::BondGraph;
 use crate::simulate::ParamChange;
 
+/// How far past the run's largest magnitude a rail starts, where it clips
+/// nothing: the run the scales come from is not the only one the candidate
+/// meets (a tighter solver's peak lies a little higher).
+const BEYOND: f64 = 1.1;
+
 /// Grid starts of each rail: a rail beyond everything the output reads changes
 /// nothing, so a local fit cannot find one from there.
 const RAIL_GRID: usize = 5;
@@ -44,9 +49,9 @@ impl EffectDef for SensorClip {
             .collect()
     }
 
-    /// `upper` from a twentieth of the largest value the output takes in the
-    /// run (the recording's, when there is one) to that value, where it does
-    /// nothing; `lower` the same below zero; five grid starts each.
+    /// `upper` from a twentieth of the largest magnitude the output takes in
+    /// the run (the recording's, when there is one) to a tenth past it, where
+    /// it does nothing; `lower` the same below zero; five grid starts each.
     fn candidate(&self, g: &BondGraph, scales: &Scales) -> Candidate {
         let o = &g.outputs()[self.output];
         let peak = scales
@@ -65,8 +70,8 @@ impl EffectDef for SensorClip {
             kind: EffectKind::MissingElement,
             acts_on: o.name.clone(),
             params: vec![
-                rail("upper", peak, (0.05 * peak, peak)),
-                rail("lower", -peak, (-peak, -0.05 * peak)),
+                rail("upper", BEYOND * peak, (0.05 * peak, BEYOND * peak)),
+                rail("lower", -BEYOND * peak, (-BEYOND * peak, -0.05 * peak)),
             ],
         }
     }
