@@ -8,7 +8,7 @@ use modelgap_core::{Candidate, EffectKind, EffectParam};
 
 use super::def::EffectDef;
 use super::edit::{added, bad, ident, new_param};
-use super::lag::signal_of;
+use super::lag::{sensed_output, sensed_outputs, signal_of};
 use super::scales::Scales;
 use super::tag::Tag;
 use crate::element::Measured;
@@ -36,15 +36,13 @@ pub struct SensorClip {
 impl SensorClip {
     /// The range of output `name` of `g`, if it reads a variable.
     pub fn named(g: &BondGraph, name: &str) -> Option<SensorClip> {
-        let output = g.outputs().iter().position(|o| o.name == name)?;
-        signal_of(g, output).map(|_| SensorClip { output })
+        sensed_output(g, name).map(|output| SensorClip { output })
     }
 }
 
 impl EffectDef for SensorClip {
     fn offers(g: &BondGraph) -> Vec<SensorClip> {
-        (0..g.outputs().len())
-            .filter(|&i| signal_of(g, i).is_some())
+        sensed_outputs(g)
             .map(|output| SensorClip { output })
             .collect()
     }

@@ -10,7 +10,7 @@ use modelgap_core::{Candidate, EffectKind, EffectParam};
 
 use super::def::EffectDef;
 use super::edit::{added, bad, ident, new_param};
-use super::lag::{lag_stage, signal_of};
+use super::lag::{lag_stage, sensed_output, sensed_outputs, signal_of};
 use super::scales::Scales;
 use super::tag::Tag;
 use crate::element::Measured;
@@ -29,15 +29,13 @@ pub struct SensorDelay {
 impl SensorDelay {
     /// The delay on output `name` of `g`, if it reads a variable.
     pub fn named(g: &BondGraph, name: &str) -> Option<SensorDelay> {
-        let output = g.outputs().iter().position(|o| o.name == name)?;
-        signal_of(g, output).map(|_| SensorDelay { output })
+        sensed_output(g, name).map(|output| SensorDelay { output })
     }
 }
 
 impl EffectDef for SensorDelay {
     fn offers(g: &BondGraph) -> Vec<SensorDelay> {
-        (0..g.outputs().len())
-            .filter(|&i| signal_of(g, i).is_some())
+        sensed_outputs(g)
             .map(|output| SensorDelay { output })
             .collect()
     }

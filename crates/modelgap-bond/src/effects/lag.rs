@@ -30,9 +30,20 @@ pub struct SensorLag {
 impl SensorLag {
     /// The lag on output `name` of `g`, if it has one whose variable reads as a signal.
     pub fn named(g: &BondGraph, name: &str) -> Option<SensorLag> {
-        let output = g.outputs().iter().position(|o| o.name == name)?;
-        signal_of(g, output).map(|_| SensorLag { output })
+        sensed_output(g, name).map(|output| SensorLag { output })
     }
+}
+
+/// The index of output `name` of `g`, if it reads a variable a sensor effect
+/// can act on ([`signal_of`]).
+pub(super) fn sensed_output(g: &BondGraph, name: &str) -> Option<usize> {
+    let output = g.outputs().iter().position(|o| o.name == name)?;
+    signal_of(g, output).map(|_| output)
+}
+
+/// Every output of `g` that reads a variable a sensor effect can act on.
+pub(super) fn sensed_outputs(g: &BondGraph) -> impl Iterator<Item = usize> + '_ {
+    (0..g.outputs().len()).filter(move |&i| signal_of(g, i).is_some())
 }
 
 /// The output's variable as a signal expression (`spring.q`, `tank.e`), or
@@ -56,8 +67,7 @@ pub(super) fn signal_of(g: &BondGraph, output: usize) -> Option<Expr> {
 
 impl EffectDef for SensorLag {
     fn offers(g: &BondGraph) -> Vec<SensorLag> {
-        (0..g.outputs().len())
-            .filter(|&i| signal_of(g, i).is_some())
+        sensed_outputs(g)
             .map(|output| SensorLag { output })
             .collect()
     }

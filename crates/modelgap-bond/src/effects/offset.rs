@@ -7,7 +7,7 @@ use modelgap_core::{Candidate, EffectKind, EffectParam};
 
 use super::def::{EffectDef, all_zero};
 use super::edit::{added, bad, ident, new_param};
-use super::lag::signal_of;
+use super::lag::{sensed_output, sensed_outputs, signal_of};
 use super::scales::Scales;
 use super::tag::Tag;
 use crate::element::Measured;
@@ -26,15 +26,13 @@ pub struct SensorOffset {
 impl SensorOffset {
     /// The offset on output `name` of `g`, if it reads a variable.
     pub fn named(g: &BondGraph, name: &str) -> Option<SensorOffset> {
-        let output = g.outputs().iter().position(|o| o.name == name)?;
-        signal_of(g, output).map(|_| SensorOffset { output })
+        sensed_output(g, name).map(|output| SensorOffset { output })
     }
 }
 
 impl EffectDef for SensorOffset {
     fn offers(g: &BondGraph) -> Vec<SensorOffset> {
-        (0..g.outputs().len())
-            .filter(|&i| signal_of(g, i).is_some())
+        sensed_outputs(g)
             .map(|output| SensorOffset { output })
             .collect()
     }

@@ -8,7 +8,7 @@ use modelgap_core::{Candidate, EffectKind, EffectParam};
 
 use super::def::EffectDef;
 use super::edit::{added, bad, ident, new_param};
-use super::lag::signal_of;
+use super::lag::{sensed_output, sensed_outputs, signal_of};
 use super::scales::Scales;
 use super::tag::Tag;
 use crate::element::Measured;
@@ -27,15 +27,13 @@ pub struct SensorScale {
 impl SensorScale {
     /// The gain on output `name` of `g`, if it reads a variable.
     pub fn named(g: &BondGraph, name: &str) -> Option<SensorScale> {
-        let output = g.outputs().iter().position(|o| o.name == name)?;
-        signal_of(g, output).map(|_| SensorScale { output })
+        sensed_output(g, name).map(|output| SensorScale { output })
     }
 }
 
 impl EffectDef for SensorScale {
     fn offers(g: &BondGraph) -> Vec<SensorScale> {
-        (0..g.outputs().len())
-            .filter(|&i| signal_of(g, i).is_some())
+        sensed_outputs(g)
             .map(|output| SensorScale { output })
             .collect()
     }
