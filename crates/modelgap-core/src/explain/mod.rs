@@ -23,6 +23,7 @@
 
 mod confirm;
 pub mod estimate;
+mod heldout;
 mod pairs;
 pub mod screen;
 
@@ -1091,11 +1092,20 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
                 .filter_map(|(_, r)| candidates.iter().find(|c| c.id == r.candidate.id).cloned())
                 .collect();
             let mut second: Option<(Vec<RankedCandidate>, Vec<f64>)> = None;
+            let mut not_held_out: Vec<String> = Vec::new();
             for first in firsts {
                 if cancelled() {
                     break;
                 }
-                let pair = second_effect(&target, opts, &pool, first, reference, &base_weighted);
+                let pair = match second_effect(&target, opts, &pool, first, reference, &base_weighted)
+                {
+                    Second::Kept(pair, weighted) => Some((pair, weighted)),
+                    Second::NotHeldOut(why) => {
+                        not_held_out.push(why);
+                        None
+                    }
+                    Second::None => None,
+                };
                 // The pair with the most evidence over the best single (its gain counts every
                 // parameter the pair adds, so a smoother law with one more parameter does not
                 // win by a hair over the menu's effect).
@@ -1137,7 +1147,15 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
                 verdict = Verdict::TwoEffects;
                 after_weighted = weighted;
                 judged_after = judge.judge(&after_weighted);
+            } else {
+                reasons.extend(not_held_out.into_iter().take(1));
             }
+        }
+        // The first effect holds too: fitted on either half, it predicts the other half
+        // better than the model without it.
+        if let Some(why) = first_not_held_out(&target, best) {
+            verdict = Verdict::Partial;
+            reasons.push(why);
         }
         if !all_at_floor(&judged_after, opts.floor_factor) {
             verdict = Verdict::Partial;
@@ -1192,6 +1210,38 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         missing,
         timings: clock.into_laps(),
     })
+}
+
+/// Why the first effect `best` does not hold on held-out data: fitted on
+/// either half of the recording, it does not predict the other half better
+/// than the model without it (calibrated on that half). `None` when it holds,
+/// or when it is an event at one time, which a fit on the half before it
+/// cannot see.
+fn first_not_held_out(target: &Target, best: &RankedCandidate) -> Option<String> {
+    let first = best.effect();
+    if heldout::is_timed(&first.candidate) {
+        return None;
+    }
+    let calibration = target.calibration.as_ref().map(|c| (c, c.initial()));
+    let without: Vec<(&Candidate, &[f64])> = (calibration.iter())
+        .map(|(c, v)| (*c, v.as_slice()))
+        .collect();
+    let first_c = prepared(&first.candidate, target.rec);
+    let with = [(&first_c, first.values.as_slice())];
+    match heldout::held_out(target, &without, &with) {
+        Some(h) if h.lowers() => None,
+        Some(h) => Some(format!(
+            "{} ({}) lowers the error of the whole recording but not the held-out error \
+             (fitted on one half, measured on the other: {}): it does not hold throughout",
+            first.candidate.id,
+            first.candidate.name,
+            h.text(heldout::half_sizes(target))
+        )),
+        None => Some(format!(
+            "{} could not be checked on held-out data (a simulation failed)",
+            first.candidate.id
+        )),
+    }
 }
 
 /// The floors of `target`'s outputs that the signal's own fast content
@@ -2013,6 +2063,31 @@ mod tests {
         fn with_effects(&self, _effects: &[Effect]) -> Result<Box<dyn Model>> {
             Ok(Box::new(Bumpy))
         }
+    }
+
+    #[test]
+    fn an_offset_the_two_halves_disagree_on_does_not_hold_out() {
+        // 0.3 in the first second, 0.1 in the next: fitted on the whole, an offset of 0.2
+        // lowers the error of each half; fitted on the first half (0.3), it raises the
+        // second's (0.2 against 0.1 without it).
+        let rec = recording(|t| if t < 1.0 { 0.3 } else { 0.1 }, 0.01, 0.0, 5);
+        let opts = ExplainOptions {
+            max_effects: 1,
+            ..ExplainOptions::default()
+        };
+        let ex = explain(&Toy, &rec, &opts).unwrap();
+        assert_eq!(ex.verdict, Verdict::Partial);
+        assert_eq!(ex.chosen[0].candidate.id, "offset");
+        assert!(
+            (ex.reasons.iter()).any(|r| r.starts_with("offset") && r.contains("held-out")),
+            "{:?}",
+            ex.reasons
+        );
+        // The same offset throughout holds.
+        let rec = recording(|_| 0.2, 0.01, 0.0, 5);
+        let ex = explain(&Toy, &rec, &opts).unwrap();
+        assert_eq!(ex.verdict, Verdict::EffectFound, "{:?}", ex.reasons);
+        assert!(!(ex.reasons.iter()).any(|r| r.contains("held-out")));
     }
 
     #[test]

@@ -1,16 +1,28 @@
 //! Second effects: what the first effect leaves. The laws discovery finds
 //! again with the first built in ([`laws_on_top`]), every candidate screened
 //! on top of it, the best few fitted jointly with it, and the pair kept only
-//! when it is significant and lowers the error on each half of the recording
-//! ([`second_effect`]).
+//! when it is significant and lowers the held-out error: fitted on either half
+//! of the recording, it predicts the other half better than the first alone
+//! ([`second_effect`], [`super::heldout`]).
 
 use super::*;
+
+/// What the search for a second effect on top of a first found.
+pub(super) enum Second {
+    /// The pair, ranked, and its joint weighted residual.
+    Kept(Vec<RankedCandidate>, Vec<f64>),
+    /// The best pair is significant in the recording but does not lower the
+    /// held-out error: why, for the verdict's reasons.
+    NotHeldOut(String),
+    /// No pair is significant.
+    None,
+}
 
 /// A second effect on top of `best`: every other candidate fitted jointly
 /// with it (both sets of parameters free, the second started from its own
 /// best fit on top of the first). Returns the pair, ranked, and the joint
 /// residual when the best pair's gain over `reference` (the weighted residual
-/// of the best single effect) is significant.
+/// of the best single effect) is significant and it lowers the held-out error.
 pub(super) fn second_effect(
     target: &Target,
     opts: &ExplainOptions,
@@ -18,7 +30,7 @@ pub(super) fn second_effect(
     best: &RankedCandidate,
     reference: &[f64],
     base_weighted: &[f64],
-) -> Option<(Vec<RankedCandidate>, Vec<f64>)> {
+) -> Second {
     let n = target.n_residuals();
     let first = best.effect();
     // The laws of what the first leaves: the missing effort estimated again with the first
@@ -106,9 +118,12 @@ pub(super) fn second_effect(
         .filter(|(a, b)| a.error.is_none() && b.error.is_none())
         .map(|(a, b)| (a, b, gain_of(a, b)))
         .collect();
-    let (_, best_second, _) = *valid
+    let Some(&(_, best_second, _)) = valid
         .iter()
-        .max_by(|x, y| preference(x.1, x.2).total_cmp(&preference(y.1, y.2)))?;
+        .max_by(|x, y| preference(x.1, x.2).total_cmp(&preference(y.1, y.2)))
+    else {
+        return Second::None;
+    };
     // The simplest of the pairs that leave the same (a wind fitted at 0.01 m/s beside the
     // drag it carries is still air): fewest parameters, then the most evidence.
     let reference_cost = 0.5 * reference.iter().map(|r| r * r).sum::<f64>();
@@ -117,7 +132,7 @@ pub(super) fn second_effect(
         |f: &Fitted| f.cost - best_cost <= SAME_EXPLANATION * (reference_cost - best_cost).max(0.0);
     // A named effect before a discovered law, then the fewest parameters.
     let k = |f: &Fitted| (f.candidate.id.starts_with("law@"), f.candidate.params.len());
-    let (joint_first, second, gain) = valid
+    let Some((joint_first, second, gain)) = valid
         .iter()
         .filter(|(_, b, _)| alike(b))
         .min_by(|x, y| {
@@ -125,17 +140,44 @@ pub(super) fn second_effect(
                 .cmp(&k(y.1))
                 .then(preference(y.1, y.2).total_cmp(&preference(x.1, x.2)))
         })
-        .copied()?;
+        .copied()
+    else {
+        return Second::None;
+    };
     let n_eff2 = target.n_eff(&joint_first.weighted);
     let rhos2 = target.rhos(&joint_first.weighted);
     if gain <= opts.significance {
-        return None;
+        return Second::None;
     }
-    // A law holds throughout: the pair must lower the error on each half of the recording
-    // (unless the second effect is itself an event at one time).
-    let timed = (second.candidate.params.iter()).any(|p| p.unit == "s" && p.name.starts_with('t'));
-    if !timed && !lowers_each_half(target, reference, &joint_first.weighted) {
-        return None;
+    // A law holds throughout: fitted on either half, the pair must predict the other half
+    // better than the first alone (unless the second effect is itself an event at one time,
+    // which a fit on the half before it cannot see).
+    if !heldout::is_timed(&second.candidate) {
+        let single = [(&first_c, first.values.as_slice())];
+        let pair = [
+            (&first_c, joint_first.values.as_slice()),
+            (&second.candidate, second.values.as_slice()),
+        ];
+        match heldout::held_out(target, &single, &pair) {
+            Some(h) if h.lowers() => {}
+            Some(h) => {
+                return Second::NotHeldOut(format!(
+                    "a second effect, {} ({}), lowers the error of the whole recording but \
+                     not the held-out error (fitted on one half, measured on the other: {}): \
+                     it is not added",
+                    second.candidate.id,
+                    second.candidate.name,
+                    h.text(heldout::half_sizes(target))
+                ));
+            }
+            None => {
+                return Second::NotHeldOut(format!(
+                    "a second effect, {}, could not be checked on held-out data (a \
+                     simulation failed): it is not added",
+                    second.candidate.id
+                ));
+            }
+        }
     }
     let white2 = Whitening {
         cost_before: target.whitened_cost(base_weighted, &rhos2),
@@ -145,10 +187,10 @@ pub(super) fn second_effect(
     first_ranked.candidate = best.candidate.clone();
     let mut second_ranked = ranked(target, second, &white2, n_eff2, n);
     second_ranked.score = gain;
-    Some((
+    Second::Kept(
         vec![first_ranked, second_ranked],
         joint_first.weighted.clone(),
-    ))
+    )
 }
 
 /// The candidates of the laws found where the model with `best` built in (and the
@@ -172,21 +214,4 @@ pub(super) fn laws_on_top(target: &Target, best: &RankedCandidate) -> Vec<Candid
         .filter_map(|m| screen::screen_with(m, linear))
         .filter_map(|l| target.model.law_candidate(&l))
         .collect()
-}
-
-/// Whether `after` leaves less than `before` on each half of the recording
-/// (all outputs together; weighted residuals, output after output).
-pub(super) fn lowers_each_half(target: &Target, before: &[f64], after: &[f64]) -> bool {
-    let n = target.rec.len();
-    let half = n / 2;
-    [0..half, half..n].into_iter().all(|range| {
-        let (mut b, mut a) = (0.0, 0.0);
-        for j in 0..target.names.len() {
-            for k in range.clone() {
-                b += before[j * n + k].powi(2);
-                a += after[j * n + k].powi(2);
-            }
-        }
-        a < b
-    })
 }

@@ -1,0 +1,227 @@
+//! Held-out error: whether what an effect explains holds on data its fit did
+//! not see. Two-fold cross-validation over the two halves of the recording —
+//! the parameters fitted on one half, the error measured on the other — for
+//! the model without the effect and with it. An effect is kept only when it
+//! lowers the held-out error on both halves: a law that fits noise, or that
+//! the two halves want with different parameters, does not.
+//!
+//! Each half's fit is one Gauss–Newton step from the fit on the whole
+//! recording, on the Jacobian there (one simulation per free parameter): the
+//! whole fit is close to each half's, so the step is the half's fit to first
+//! order, and a check costs a handful of simulations rather than four fits.
+//! An effect that acts mostly in one half (a bump in time, a change late in
+//! the run) has no held-out error: a half that holds less than a tenth of what
+//! any of its parameters moves is not a test of it, and neither fold is then
+//! judged. Lattice parameters (a vertex) are held.
+
+use super::*;
+
+/// The share of what each parameter moves (Σ of its Jacobian column squared)
+/// that each half must hold for the folds to test it.
+const ACTS_IN_HALF: f64 = 0.1;
+
+/// The held-out error of two models, each fitted on one half of the
+/// recording and measured on the other: ½Σr² of the weighted residuals on
+/// the first half, then on the second.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct HeldOut {
+    /// Without the effect (the model as it was).
+    pub(super) without: [f64; 2],
+    /// With it.
+    pub(super) with: [f64; 2],
+    /// Whether every parameter of the model with the effect acts in both
+    /// halves ([`ACTS_IN_HALF`]): else the folds test nothing.
+    pub(super) judged: bool,
+}
+
+impl HeldOut {
+    /// Whether the effect lowers the held-out error on both halves (true when
+    /// the halves cannot test it: nothing speaks against it).
+    pub(super) fn lowers(&self) -> bool {
+        !self.judged || self.with.iter().zip(&self.without).all(|(a, b)| a < b)
+    }
+
+    /// The held-out RMS without and with the effect, each half, as text
+    /// (weighted residuals: in units of each output's noise floor).
+    pub(super) fn text(&self, n_per_half: [usize; 2]) -> String {
+        if !self.judged {
+            return "it acts mostly in one half, so the halves cannot test it".to_string();
+        }
+        let rms = |cost: f64, n: usize| (2.0 * cost / n.max(1) as f64).sqrt();
+        format!(
+            "first half {:.3} → {:.3}, second half {:.3} → {:.3} times the floor",
+            rms(self.without[0], n_per_half[0]),
+            rms(self.with[0], n_per_half[0]),
+            rms(self.without[1], n_per_half[1]),
+            rms(self.with[1], n_per_half[1]),
+        )
+    }
+}
+
+/// Whether a candidate is an event at one time (a step, a fault at `t`): a
+/// fit on the half before it cannot see it, so it has no held-out error.
+pub(super) fn is_timed(c: &Candidate) -> bool {
+    (c.params.iter()).any(|p| p.unit == "s" && p.name.starts_with('t'))
+}
+
+/// The held-out error of the model without and with an effect: `without`
+/// and `with` are the effects built in (each with its values from a fit on
+/// the whole recording). `None` when a simulation fails.
+pub(super) fn held_out(
+    target: &Target,
+    without: &[(&Candidate, &[f64])],
+    with: &[(&Candidate, &[f64])],
+) -> Option<HeldOut> {
+    let (without, _) = two_fold(target, without)?;
+    let (with, judged) = two_fold(target, with)?;
+    Some(HeldOut {
+        without,
+        with,
+        judged,
+    })
+}
+
+/// The samples in each half of the recording.
+pub(super) fn half_sizes(target: &Target) -> [usize; 2] {
+    let n = target.rec.len();
+    let m = target.names.len();
+    [m * (n / 2), m * (n - n / 2)]
+}
+
+/// ½Σr² on each half of the model with `effects`, each predicted by a fit on
+/// the other half (one Gauss–Newton step from `effects`' values), and whether
+/// every free parameter acts in both halves.
+fn two_fold(target: &Target, effects: &[(&Candidate, &[f64])]) -> Option<([f64; 2], bool)> {
+    let m = target.n_residuals();
+    let mut r0 = vec![0.0; m];
+    target.residuals(effects, &mut r0).ok()?;
+    if r0.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    // The free directions: every continuous parameter with room to move.
+    let free: Vec<(usize, usize)> = (effects.iter().enumerate())
+        .flat_map(|(e, (c, _))| {
+            (c.params.iter().enumerate())
+                .filter(|(_, p)| !p.is_discrete() && p.lower < p.upper)
+                .map(move |(i, _)| (e, i))
+        })
+        .collect();
+    let fd = screen_fd_step(target.model);
+    let columns: Vec<Vec<f64>> = free
+        .par_iter()
+        .map(|&(e, i)| {
+            let p = &effects[e].0.params[i];
+            let x = effects[e].1[i];
+            let h = if x + fd * p.scale <= p.upper {
+                fd * p.scale
+            } else {
+                -fd * p.scale
+            };
+            let mut values: Vec<Vec<f64>> = effects.iter().map(|(_, v)| v.to_vec()).collect();
+            values[e][i] = x + h;
+            let moved: Vec<(&Candidate, &[f64])> = (effects.iter().zip(&values))
+                .map(|((c, _), v)| (*c, v.as_slice()))
+                .collect();
+            let mut r1 = vec![0.0; m];
+            target.residuals(&moved, &mut r1).ok()?;
+            let col: Vec<f64> = r1.iter().zip(&r0).map(|(a, b)| (a - b) / h).collect();
+            col.iter().all(|v| v.is_finite()).then_some(col)
+        })
+        .collect::<Option<Vec<_>>>()?;
+    let n = target.rec.len();
+    let half = n / 2;
+    let in_half = |row: usize, h: usize| ((row % n) < half) == (h == 0);
+    let acts_in_both = columns.iter().all(|col| {
+        let total: f64 = col.iter().map(|v| v * v).sum();
+        let first: f64 = (0..m).filter(|&row| in_half(row, 0)).map(|row| col[row].powi(2)).sum();
+        total > 0.0 && first >= ACTS_IN_HALF * total && total - first >= ACTS_IN_HALF * total
+    });
+    let mut out = [0.0; 2];
+    for (h, o) in out.iter_mut().enumerate() {
+        let delta = half_step(&columns, &r0, |row| !in_half(row, h));
+        *o = 0.5
+            * (0..m)
+                .filter(|&row| in_half(row, h))
+                .map(|row| {
+                    let moved: f64 = (columns.iter().zip(&delta)).map(|(c, d)| c[row] * d).sum();
+                    (r0[row] + moved).powi(2)
+                })
+                .sum::<f64>();
+    }
+    Some((out, acts_in_both))
+}
+
+/// The Gauss–Newton step `δ` minimising ‖r + Jδ‖² over the rows `train`
+/// keeps, by the pseudo-inverse: a direction the rows do not see (a singular
+/// value below 1e-10 of the largest) does not move.
+fn half_step(columns: &[Vec<f64>], r: &[f64], train: impl Fn(usize) -> bool) -> Vec<f64> {
+    let k = columns.len();
+    if k == 0 {
+        return Vec::new();
+    }
+    let rows: Vec<usize> = (0..r.len()).filter(|&row| train(row)).collect();
+    let mut jtj = nalgebra::DMatrix::<f64>::zeros(k, k);
+    let mut jtr = nalgebra::DVector::<f64>::zeros(k);
+    for a in 0..k {
+        for b in 0..=a {
+            let v: f64 = rows.iter().map(|&row| columns[a][row] * columns[b][row]).sum();
+            jtj[(a, b)] = v;
+            jtj[(b, a)] = v;
+        }
+        jtr[a] = rows.iter().map(|&row| columns[a][row] * r[row]).sum();
+    }
+    // Scaled to unit diagonal, so the cut-off compares directions, not units.
+    let d: Vec<f64> = (0..k)
+        .map(|a| {
+            let v = jtj[(a, a)];
+            if v > 0.0 { 1.0 / v.sqrt() } else { 0.0 }
+        })
+        .collect();
+    let scaled = nalgebra::DMatrix::from_fn(k, k, |a, b| jtj[(a, b)] * d[a] * d[b]);
+    let rhs = nalgebra::DVector::from_fn(k, |a, _| -jtr[a] * d[a]);
+    let eig = scaled.symmetric_eigen();
+    let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
+    let mut y = nalgebra::DVector::<f64>::zeros(k);
+    for (j, &lambda) in eig.eigenvalues.iter().enumerate() {
+        if lambda > 1e-10 * top {
+            let v = eig.eigenvectors.column(j);
+            y += v * (v.dot(&rhs) / lambda);
+        }
+    }
+    (0..k).map(|a| y[a] * d[a]).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn half_step_solves_least_squares_and_leaves_unseen_directions() {
+        // r + J δ with J = [[1, 0], [1, 0], [0, 1], [0, 1]], r = [-1, -3, 2, 2]:
+        // trained on rows 0 and 1, δ₀ = 2 and the second column, zero there, stays.
+        let columns = vec![vec![1.0, 1.0, 0.0, 0.0], vec![0.0, 0.0, 1.0, 1.0]];
+        let r = [-1.0, -3.0, 2.0, 2.0];
+        let d = half_step(&columns, &r, |row| row < 2);
+        assert!((d[0] - 2.0).abs() < 1e-12, "{d:?}");
+        assert_eq!(d[1], 0.0);
+        // Trained on all rows, both move.
+        let d = half_step(&columns, &r, |_| true);
+        assert!((d[0] - 2.0).abs() < 1e-12 && (d[1] + 2.0).abs() < 1e-12, "{d:?}");
+    }
+
+    #[test]
+    fn an_effect_fitted_to_noise_does_not_lower_the_held_out_error() {
+        let mut held = HeldOut {
+            without: [10.0, 10.0],
+            with: [9.0, 10.5],
+            judged: true,
+        };
+        assert!(!held.lowers());
+        held.with = [9.0, 9.5];
+        assert!(held.lowers());
+        // An effect the halves cannot test is not refused.
+        held.with = [9.0, 10.5];
+        held.judged = false;
+        assert!(held.lowers());
+    }
+}
