@@ -509,6 +509,72 @@ pub(super) fn confirm(
     }
 }
 
+/// A law confirmed with more than one term (`fitted`), made as simple as its
+/// evidence allows: each term dropped in turn — the law without it built and
+/// fitted from the confirmed values — and the drop that costs least taken
+/// while the simpler law scores at least as well (evidence over the model as
+/// given, `base_weighted`, whitened with the full law's noise model, its
+/// parameters counted); then again on what is left. The screen may take a
+/// term to mend a shape its estimate bent (the calibration took part of a law
+/// that is not linear, the smoother lags a sharp one); the joint fit no
+/// longer needs it.
+pub(super) fn simplest_law(
+    target: &Target,
+    law: &screen::Law,
+    fitted: Fitted,
+    base_weighted: &[f64],
+    opts: &ExplainOptions,
+) -> Fitted {
+    let rhos = target.rhos(&fitted.weighted);
+    let before = target.whitened_cost(base_weighted, &rhos);
+    let evidence = |f: &Fitted| {
+        let own = f.candidate.params.len() - target.n_calibration(&f.candidate);
+        score(
+            before,
+            target.whitened_cost(&f.weighted, &rhos),
+            own,
+            target.n_whitened(),
+        )
+    };
+    let mut law = law.clone();
+    let mut best = fitted;
+    while law.terms.len() > 1 {
+        let trials: Vec<(screen::Law, Fitted)> = (0..law.terms.len())
+            .into_par_iter()
+            .filter_map(|j| {
+                let mut smaller = law.clone();
+                smaller.terms.remove(j);
+                let c = prepared(
+                    &target.joint(&target.model.law_candidate(&smaller)?),
+                    target.rec,
+                );
+                // From the confirmed values, by name (the law's parameter names are unique).
+                let start: Vec<f64> = (c.params.iter())
+                    .map(|p| {
+                        (best.candidate.params.iter().zip(&best.values))
+                            .find(|(q, _)| q.name == p.name)
+                            .map_or(p.initial, |(_, v)| v.clamp(p.lower, p.upper))
+                    })
+                    .collect();
+                let f = confirm(target, &[], &c, &start, opts);
+                f.error.is_none().then_some((smaller, f))
+            })
+            .collect();
+        let Some((smaller, f)) = trials
+            .into_iter()
+            .max_by(|a, b| evidence(&a.1).total_cmp(&evidence(&b.1)))
+        else {
+            break;
+        };
+        if evidence(&f) < evidence(&best) {
+            break;
+        }
+        law = smaller;
+        best = f;
+    }
+    best
+}
+
 /// A candidate confirmed by a fit: its report and weighted residual (the data's rows only:
 /// the priors' are part of the fit, not of the residual).
 fn confirmed(target: &Target, c: &Candidate, report: FitReport, mut weighted: Vec<f64>) -> Fitted {

@@ -9,10 +9,13 @@
 //! recording, on the Jacobian there (one simulation per free parameter): the
 //! whole fit is close to each half's, so the step is the half's fit to first
 //! order, and a check costs a handful of simulations rather than four fits.
-//! An effect that acts mostly in one half (a bump in time, a change late in
-//! the run) has no held-out error: a half that holds less than a tenth of what
-//! any of its parameters moves is not a test of it, and neither fold is then
-//! judged. Lattice parameters (a vertex) are held.
+//! A parameter a half hardly sees (less than a tenth of what it moves: an
+//! initial state that has died out by then) keeps its whole-recording value in
+//! the fit on that half. An effect that acts mostly in one half (a bump in
+//! time, a change late in the run) has no held-out error: a half that holds
+//! less than a tenth of what any of its own parameters moves is not a test of
+//! it, and neither fold is then judged. Lattice parameters (a vertex) are
+//! held.
 
 use super::*;
 
@@ -72,11 +75,18 @@ pub(super) fn held_out(
     without: &[(&Candidate, &[f64])],
     with: &[(&Candidate, &[f64])],
 ) -> Option<HeldOut> {
-    let (without, _) = two_fold(target, without)?;
-    let (with, judged) = two_fold(target, with)?;
+    let (cost_without, _) = two_fold(target, without)?;
+    let (cost_with, acting) = two_fold(target, with)?;
+    // Judged when every parameter the effect adds acts in both halves.
+    let before: Vec<&str> = (without.iter())
+        .flat_map(|(c, _)| c.params.iter().map(|p| p.name.as_str()))
+        .collect();
+    let judged = acting
+        .iter()
+        .all(|(name, both)| *both || before.contains(&name.as_str()));
     Some(HeldOut {
-        without,
-        with,
+        without: cost_without,
+        with: cost_with,
         judged,
     })
 }
@@ -89,9 +99,13 @@ pub(super) fn half_sizes(target: &Target) -> [usize; 2] {
 }
 
 /// ½Σr² on each half of the model with `effects`, each predicted by a fit on
-/// the other half (one Gauss–Newton step from `effects`' values), and whether
-/// every free parameter acts in both halves.
-fn two_fold(target: &Target, effects: &[(&Candidate, &[f64])]) -> Option<([f64; 2], bool)> {
+/// the other half (one Gauss–Newton step from `effects`' values, the
+/// parameters the other half hardly sees held), and for each free parameter
+/// whether it acts in both halves.
+fn two_fold(
+    target: &Target,
+    effects: &[(&Candidate, &[f64])],
+) -> Option<([f64; 2], Vec<(String, bool)>)> {
     let m = target.n_residuals();
     let mut r0 = vec![0.0; m];
     target.residuals(effects, &mut r0).ok()?;
@@ -131,14 +145,41 @@ fn two_fold(target: &Target, effects: &[(&Candidate, &[f64])]) -> Option<([f64; 
     let n = target.rec.len();
     let half = n / 2;
     let in_half = |row: usize, h: usize| ((row % n) < half) == (h == 0);
-    let acts_in_both = columns.iter().all(|col| {
-        let total: f64 = col.iter().map(|v| v * v).sum();
-        let first: f64 = (0..m).filter(|&row| in_half(row, 0)).map(|row| col[row].powi(2)).sum();
-        total > 0.0 && first >= ACTS_IN_HALF * total && total - first >= ACTS_IN_HALF * total
-    });
+    // Each column's share of what it moves in each half.
+    let shares: Vec<[f64; 2]> = (columns.iter())
+        .map(|col| {
+            let total: f64 = col.iter().map(|v| v * v).sum();
+            let first: f64 = (0..m)
+                .filter(|&row| in_half(row, 0))
+                .map(|row| col[row].powi(2))
+                .sum();
+            if total > 0.0 {
+                [first / total, 1.0 - first / total]
+            } else {
+                [0.0, 0.0]
+            }
+        })
+        .collect();
+    let acting: Vec<(String, bool)> = (free.iter().zip(&shares))
+        .map(|(&(e, i), sh)| {
+            let name = effects[e].0.params[i].name.clone();
+            (name, sh[0] >= ACTS_IN_HALF && sh[1] >= ACTS_IN_HALF)
+        })
+        .collect();
     let mut out = [0.0; 2];
     for (h, o) in out.iter_mut().enumerate() {
-        let delta = half_step(&columns, &r0, |row| !in_half(row, h));
+        // Fitted on the other half, with what it sees.
+        let seen: Vec<Vec<f64>> = (columns.iter().zip(&shares))
+            .map(|(col, sh)| {
+                if sh[1 - h] >= ACTS_IN_HALF {
+                    col.clone()
+                } else {
+                    vec![0.0; m]
+                }
+            })
+            .collect();
+        let columns = &seen;
+        let delta = half_step(columns, &r0, |row| !in_half(row, h));
         *o = 0.5
             * (0..m)
                 .filter(|&row| in_half(row, h))
@@ -148,12 +189,13 @@ fn two_fold(target: &Target, effects: &[(&Candidate, &[f64])]) -> Option<([f64; 
                 })
                 .sum::<f64>();
     }
-    Some((out, acts_in_both))
+    Some((out, acting))
 }
 
 /// The Gauss–Newton step `δ` minimising ‖r + Jδ‖² over the rows `train`
-/// keeps, by the pseudo-inverse: a direction the rows do not see (a singular
-/// value below 1e-10 of the largest) does not move.
+/// keeps, by the pseudo-inverse: a direction the rows do not see (an
+/// eigenvalue of the scaled normal matrix below 1e-9 of the largest) does
+/// not move.
 fn half_step(columns: &[Vec<f64>], r: &[f64], train: impl Fn(usize) -> bool) -> Vec<f64> {
     let k = columns.len();
     if k == 0 {
@@ -170,7 +212,8 @@ fn half_step(columns: &[Vec<f64>], r: &[f64], train: impl Fn(usize) -> bool) -> 
         }
         jtr[a] = rows.iter().map(|&row| columns[a][row] * r[row]).sum();
     }
-    // Scaled to unit diagonal, so the cut-off compares directions, not units.
+    // Scaled to unit diagonal, so the cut-off compares directions, not units; a column
+    // of zeros (held) does not move.
     let d: Vec<f64> = (0..k)
         .map(|a| {
             let v = jtj[(a, a)];
@@ -183,7 +226,7 @@ fn half_step(columns: &[Vec<f64>], r: &[f64], train: impl Fn(usize) -> bool) -> 
     let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
     let mut y = nalgebra::DVector::<f64>::zeros(k);
     for (j, &lambda) in eig.eigenvalues.iter().enumerate() {
-        if lambda > 1e-10 * top {
+        if lambda > 1e-9 * top {
             let v = eig.eigenvectors.column(j);
             y += v * (v.dot(&rhs) / lambda);
         }

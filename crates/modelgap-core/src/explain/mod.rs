@@ -850,7 +850,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         .map(|c| target.joint(&c))
         .collect();
     let mut candidates = candidates;
-    candidates.extend(laws.iter().map(|c| target.joint(c)));
+    candidates.extend(laws.iter().map(|(c, _)| target.joint(c)));
     let done = AtomicUsize::new(0);
     let cancelled = || opts.cancel.as_deref().is_some_and(Cancel::is_cancelled);
     // Screen: every candidate sized by one linearised step from its start (in parallel).
@@ -945,6 +945,23 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         .filter(|(_, finished)| *finished || !interrupted)
         .map(|(f, _)| f)
         .collect();
+    // Each law confirmed with more than one term, as simple as its evidence allows: the
+    // screen may take a term to mend a shape its estimate bent, which the joint fit no
+    // longer needs.
+    let fitted: Vec<Fitted> = if interrupted {
+        fitted
+    } else {
+        fitted
+            .into_iter()
+            .map(|f| match laws.iter().find(|(c, _)| c.id == f.candidate.id) {
+                Some((_, law)) if law.terms.len() > 1 && f.error.is_none() && !f.screened => {
+                    simplest_law(&target, law, f, &base_weighted, opts)
+                }
+                _ => f,
+            })
+            .collect()
+    };
+    clock.lap("simplest-law");
     // Effective sample size from the best fit's residual (or the model's own
     // residual when nothing fits better): what noise alone looks like.
     let best_fit = fitted
@@ -1226,8 +1243,11 @@ fn first_not_held_out(target: &Target, best: &RankedCandidate) -> Option<String>
     let without: Vec<(&Candidate, &[f64])> = (calibration.iter())
         .map(|(c, v)| (*c, v.as_slice()))
         .collect();
-    let first_c = prepared(&first.candidate, target.rec);
-    let with = [(&first_c, first.values.as_slice())];
+    // The calibration as fitted jointly with it, then the effect.
+    let with: Vec<(Candidate, Vec<f64>)> = (target.with_first(best).into_iter())
+        .map(|(c, v)| (prepared(&c, target.rec), v))
+        .collect();
+    let with: Vec<(&Candidate, &[f64])> = with.iter().map(|(c, v)| (c, v.as_slice())).collect();
     match heldout::held_out(target, &without, &with) {
         Some(h) if h.lowers() => None,
         Some(h) => Some(format!(
@@ -1321,7 +1341,7 @@ fn discover(
 ) -> (
     Vec<estimate::PlaceFinding>,
     Vec<estimate::MissingSignal>,
-    Vec<Candidate>,
+    Vec<(Candidate, screen::Law)>,
 ) {
     let split = target.split(&[]);
     let effects: Vec<(&Candidate, &[f64])> = split.iter().map(|(c, v)| (c, v.as_slice())).collect();
@@ -1355,7 +1375,7 @@ fn discover(
             .filter(|_| m.explained >= 0.5 * best && m.explained > 0.05)
             && let Some(c) = target.model.law_candidate(l)
         {
-            candidates.push(c);
+            candidates.push((c, l.clone()));
         }
         places.push(estimate::PlaceFinding {
             location: m.location.clone(),
@@ -1423,6 +1443,30 @@ fn order_ranking(ranking: &mut Vec<RankedCandidate>, significance: f64, cost_bef
                     .then(b.score.total_cmp(&a.score))
             })
             .map(|(i, _)| i);
+        // A discovered law with fewer parameters than a named effect that leaves the same
+        // (within a twentieth of what they remove) is that effect with its shape baked in (a
+        // harmonic's order, chosen by the screen's scan): the named effect comes first.
+        let simplest = simplest.map(|i| {
+            if !is_law(&ranking[i]) {
+                return i;
+            }
+            let law_cost = ranking[i].cost;
+            let removed = (cost_before - law_cost).max(0.0);
+            (ranking.iter().enumerate())
+                .filter(|(_, r)| {
+                    lowers(r)
+                        && !r.screened
+                        && !is_law(r)
+                        && r.score >= best - significance
+                        && (r.cost - law_cost).abs() <= SAME_EXPLANATION * removed
+                })
+                .min_by(|(_, a), (_, b)| {
+                    (a.candidate.params.len())
+                        .cmp(&b.candidate.params.len())
+                        .then(b.score.total_cmp(&a.score))
+                })
+                .map_or(i, |(j, _)| j)
+        });
         if let Some(i) = simplest
             && i > 0
         {

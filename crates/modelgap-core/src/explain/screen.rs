@@ -16,6 +16,7 @@
 //! | square root | `√max(e, 0)` | node efforts (an orifice) |
 //! | power | `sign(e)·|e|^p`, p scanned over 0.3 … 3 | node efforts (seepage, convection) |
 //! | harmonics | `sin nθ`, `cos nθ`, every n in 1..=24 at once | angles |
+//! | product | `a·b`, `a·|b|`, `a²·b` of two signals; `b·sin nθ`, `b·cos nθ` for n in 1..=12 | flows, positions, displacements, efforts, angles |
 //! | ripple | `sin(2πx/λ)`, `cos(2πx/λ)`, λ scanned over 1/100 … 1/2 of the travel | positions |
 //! | step | `H(t − t₀)`, t₀ scanned | time |
 //! | ramp | `max(t − t₀, 0)`, t₀ scanned | time |
@@ -45,6 +46,8 @@ const MIN_SHARE: f64 = 0.1;
 const MAX_HARMONIC: usize = 24;
 /// Interior points of a step's or a ramp's time scan.
 const TIME_SCAN: usize = 39;
+/// Harmonics of an angle that a product with another signal takes, up to this order.
+const MAX_PRODUCT_HARMONIC: usize = 12;
 
 /// A term's family: one member of a shape family per law.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
@@ -77,6 +80,10 @@ pub enum Family {
     Step,
     /// `max(t − t₀, 0)`: a drift from one time on.
     Ramp,
+    /// A product of two signals acting at the place (`q²·v`: damping that
+    /// grows with the displacement; `x·v`), or of one with a harmonic of the
+    /// angle (`v·sin nθ`: friction that varies around a turn).
+    Product,
 }
 
 impl Family {
@@ -96,6 +103,7 @@ impl Family {
             Family::Ripple => "a ripple locked to the position (a pitch)",
             Family::Step => "a step at one time (a load or a fault)",
             Family::Ramp => "a drift from one time on",
+            Family::Product => "a product of two signals (one modulates the other's effect)",
         }
     }
 }
@@ -696,6 +704,7 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
             SignalRole::Input => {}
         }
     }
+    out.extend(products(m, idx));
     // Steps and ramps scanned over interior times (not within 5 % of either end).
     if let (Some(&t0), Some(&t1)) = (t.first(), t.last()) {
         let span = t1 - t0;
@@ -747,6 +756,153 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
         }
     }
     out
+}
+
+/// The product family: for every two signals acting at the place (flows,
+/// positions, displacements, efforts), `a·b`, `a·|b|`, `|a|·b`, `a²·b` and
+/// `a·b²` (each odd in one of them, so that it is not a constant in
+/// disguise), and for an angle with every other signal, `b·sin nθ` and
+/// `b·cos nθ` (n in 1..=[`MAX_PRODUCT_HARMONIC`]). One family, one member per
+/// law: its size is the multiple-comparison cost of taking any.
+fn products(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
+    let varying = |a: &&ActingSignal| {
+        let v: Vec<f64> = idx.iter().map(|&k| a.values[k]).collect();
+        let s = rms_of(&v);
+        s.is_finite() && s > 0.0
+    };
+    let plain: Vec<&ActingSignal> = (m.acting.iter())
+        .filter(|a| {
+            matches!(
+                a.role,
+                SignalRole::Flow
+                    | SignalRole::Position
+                    | SignalRole::Displacement
+                    | SignalRole::Effort
+            )
+        })
+        .filter(varying)
+        .collect();
+    let angles: Vec<&ActingSignal> = (m.acting.iter())
+        .filter(|a| a.role == SignalRole::Angle)
+        .filter(varying)
+        .collect();
+    let col = |a: &ActingSignal| -> Vec<f64> { idx.iter().map(|&k| a.values[k]).collect() };
+    let power = |u: &str, p: u32| match (u.is_empty(), p) {
+        (true, _) => String::new(),
+        (false, 1) => u.to_string(),
+        (false, _) => format!("({u})^{p}"),
+    };
+    let times = |a: &str, b: &str| match (a.is_empty(), b.is_empty()) {
+        (true, _) => b.to_string(),
+        (_, true) => a.to_string(),
+        _ => format!("{a} {b}"),
+    };
+    let eu = &m.unit;
+    // Each factor form of a signal: x, |x|, x².
+    struct Factor {
+        label: String,
+        expr: String,
+        unit: String,
+        odd: bool,
+        values: Vec<f64>,
+    }
+    let factors = |a: &ActingSignal| -> Vec<Factor> {
+        let v = col(a);
+        let (n, l, u) = (&a.name, &a.label, &a.unit);
+        vec![
+            Factor {
+                label: l.clone(),
+                expr: n.clone(),
+                unit: power(u, 1),
+                odd: true,
+                values: v.clone(),
+            },
+            Factor {
+                label: format!("|{l}|"),
+                expr: format!("abs({n})"),
+                unit: power(u, 1),
+                odd: false,
+                values: v.iter().map(|x| x.abs()).collect(),
+            },
+            Factor {
+                label: format!("({l})²"),
+                expr: format!("{n}^2"),
+                unit: power(u, 2),
+                odd: false,
+                values: v.iter().map(|x| x * x).collect(),
+            },
+        ]
+    };
+    let mut blocks: Vec<(String, Vec<LawTerm>, Vec<Vec<f64>>)> = Vec::new();
+    for (i, a) in plain.iter().enumerate() {
+        for b in &plain[i + 1..] {
+            let (fa, fb) = (factors(a), factors(b));
+            for x in &fa {
+                for y in &fb {
+                    // Odd in one of them at least: |a|·|b|, a²·|b| and a²·b² are positive
+                    // throughout, a constant in disguise.
+                    if !x.odd && !y.odd {
+                        continue;
+                    }
+                    blocks.push((
+                        format!("{}*{}", x.expr, y.expr),
+                        vec![term(
+                            "c_prod",
+                            Family::Product,
+                            format!("{} · {}", x.label, y.label),
+                            format!("{} * {}", x.expr, y.expr),
+                            per(eu, &times(&x.unit, &y.unit)),
+                        )],
+                        vec![x.values.iter().zip(&y.values).map(|(p, q)| p * q).collect()],
+                    ));
+                }
+            }
+        }
+    }
+    for th in &angles {
+        let angle = col(th);
+        for b in &plain {
+            let v = col(b);
+            for order in 1..=MAX_PRODUCT_HARMONIC {
+                let k = order as f64;
+                let unit = per(eu, &b.unit);
+                blocks.push((
+                    format!("{}#{order}*{}", th.name, b.name),
+                    vec![
+                        term(
+                            &format!("c_{order}sin"),
+                            Family::Product,
+                            format!("{} · sin({order} · {})", b.label, th.label),
+                            format!("{} * sin({order} * {})", b.name, th.name),
+                            unit.clone(),
+                        ),
+                        term(
+                            &format!("c_{order}cos"),
+                            Family::Product,
+                            format!("{} · cos({order} · {})", b.label, th.label),
+                            format!("{} * cos({order} * {})", b.name, th.name),
+                            unit,
+                        ),
+                    ],
+                    vec![
+                        v.iter().zip(&angle).map(|(x, q)| x * (k * q).sin()).collect(),
+                        v.iter().zip(&angle).map(|(x, q)| x * (k * q).cos()).collect(),
+                    ],
+                ));
+            }
+        }
+    }
+    let scanned = blocks.len();
+    blocks
+        .into_iter()
+        .map(|(member, terms, columns)| Block {
+            family: Family::Product,
+            member,
+            scanned,
+            terms,
+            columns,
+        })
+        .collect()
 }
 
 /// Weighted least squares of `y` on the columns `cols` (weights `w`):
