@@ -400,11 +400,7 @@ fn van_der_pol(c: f64, seed: u64) -> Recording {
             v += h / 6.0 * (k1.1 + 2.0 * k2.1 + 2.0 * k3.1 + k4.1);
         }
     }
-    Recording::new(
-        t,
-        vec![Signal::new("u", u), Signal::new("y", y)],
-    )
-    .unwrap()
+    Recording::new(t, vec![Signal::new("u", u), Signal::new("y", y)]).unwrap()
 }
 
 fn silverbox_linear() -> Box<dyn modelgap::Model> {

@@ -12,7 +12,7 @@
 
 use modelgap::bond::simulate::Hold;
 use modelgap::bond::{BondModel, library};
-use modelgap::{ExplainOptions, Explanation, Recording, Signal, explain};
+use modelgap::{ExplainOptions, Explanation, Recording, Signal, Verdict, explain};
 
 /// A small deterministic Gaussian generator (Box–Muller on a xorshift).
 struct Noise(u64);
@@ -52,7 +52,16 @@ struct Hidden {
     sensor_gain: Option<f64>,
     /// The speed sensor's pure delay, in whole samples.
     sensor_delay: usize,
+    /// Play in the drive: (the inertia behind the gap, the gap's half-width in
+    /// rad). The motor keeps `J` less that inertia; the load is driven through
+    /// a Hunt–Crossley contact (`k δ^1.5 + λ δ^1.5 δ̇`) once the gap closes.
+    backlash: Option<(f64, f64)>,
 }
+
+/// The Hunt–Crossley contact of the backlash case: stiffness (N m/rad^1.5)
+/// and damping (N m s/rad^2.5).
+const CONTACT_K: f64 = 8000.0;
+const CONTACT_LAMBDA: f64 = 6000.0;
 
 const R: f64 = 1.0;
 const L: f64 = 5e-3;
@@ -60,13 +69,40 @@ const K: f64 = 0.05;
 const J: f64 = 1e-4;
 const BETA: f64 = 1e-5;
 
-/// State: [ψ (flux of the inductor), p = J ω, θ, E = ∫ R i² dt, sensor].
-fn derivative(h: &Hidden, v: f64, t: f64, x: [f64; 5]) -> [f64; 5] {
+/// The motor's own inertia: `J`, less what sits behind a gap.
+fn motor_inertia(h: &Hidden) -> f64 {
+    J - h.backlash.map_or(0.0, |(jl, _)| jl)
+}
+
+/// State: [ψ (flux of the inductor), p = J ω, θ, E = ∫ R i² dt, sensor,
+/// the load's momentum, the twist across the gap].
+fn derivative(h: &Hidden, v: f64, t: f64, x: [f64; 7]) -> [f64; 7] {
     let i = match h.saturation_current {
         None => x[0] / L,
         Some(is) => is * (x[0] / (L * is)).clamp(-0.999_999, 0.999_999).atanh(),
     };
-    let w = x[1] / J;
+    let w = x[1] / motor_inertia(h);
+    // The contact torque on the load across the gap, and the load's speed.
+    let (contact, w_load) = match h.backlash {
+        None => (0.0, w),
+        Some((jl, b)) => {
+            let w_load = x[5] / jl;
+            let depth = x[6].abs() - b;
+            let torque = if depth > 0.0 {
+                let d = depth.powf(1.5);
+                x[6].signum() * CONTACT_K * d + CONTACT_LAMBDA * d * (w - w_load)
+            } else {
+                0.0
+            };
+            // A contact pushes; it never pulls.
+            let torque = if torque * x[6].signum() > 0.0 {
+                torque
+            } else {
+                0.0
+            };
+            (torque, w_load)
+        }
+    };
     let r = R * (1.0 + h.heating * x[3]);
     let vd = v.signum() * (v.abs() - h.dead_zone).max(0.0) * h.driver_gain.unwrap_or(1.0);
     let vd = h.limit.map_or(vd, |l| vd.clamp(-l, l));
@@ -78,10 +114,12 @@ fn derivative(h: &Hidden, v: f64, t: f64, x: [f64; 5]) -> [f64; 5] {
     };
     [
         vd - r * i - K * w,
-        K * i - BETA * w - extra,
+        K * i - BETA * w - extra - contact,
         w,
         r * i * i,
         sensor,
+        contact,
+        w - w_load,
     ]
 }
 
@@ -95,7 +133,7 @@ fn record(h: &Hidden, white: f64, coloured: f64, seed: u64) -> Recording {
     let dt = 1e-3;
     let n = 6000;
     let sub = 20;
-    let mut x = [0.0; 5];
+    let mut x = [0.0; 7];
     let (mut ti, mut om, mut vs, mut ts) = (vec![], vec![], vec![], vec![]);
     for k in 0..=n {
         let t = k as f64 * dt;
@@ -103,7 +141,11 @@ fn record(h: &Hidden, white: f64, coloured: f64, seed: u64) -> Recording {
             None => x[0] / L,
             Some(is) => is * (x[0] / (L * is)).clamp(-0.999_999, 0.999_999).atanh(),
         };
-        let w = if h.sensor_lag > 0.0 { x[4] } else { x[1] / J };
+        let w = if h.sensor_lag > 0.0 {
+            x[4]
+        } else {
+            x[1] / motor_inertia(h)
+        };
         let w = if h.sensor_step > 0.0 {
             (w / h.sensor_step).round() * h.sensor_step
         } else {
@@ -116,10 +158,10 @@ fn record(h: &Hidden, white: f64, coloured: f64, seed: u64) -> Recording {
         let hh = dt / sub as f64;
         for s in 0..sub {
             let t0 = t + s as f64 * hh;
-            let f = |tt: f64, xx: [f64; 5]| derivative(h, drive(tt), tt, xx);
-            let add = |a: [f64; 5], b: [f64; 5], c: f64| {
+            let f = |tt: f64, xx: [f64; 7]| derivative(h, drive(tt), tt, xx);
+            let add = |a: [f64; 7], b: [f64; 7], c: f64| {
                 let mut o = a;
-                for j in 0..5 {
+                for j in 0..7 {
                     o[j] += c * b[j];
                 }
                 o
@@ -128,7 +170,7 @@ fn record(h: &Hidden, white: f64, coloured: f64, seed: u64) -> Recording {
             let k2 = f(t0 + hh / 2.0, add(x, k1, hh / 2.0));
             let k3 = f(t0 + hh / 2.0, add(x, k2, hh / 2.0));
             let k4 = f(t0 + hh, add(x, k3, hh));
-            for j in 0..5 {
+            for j in 0..7 {
                 x[j] += hh / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]);
             }
         }
@@ -341,6 +383,13 @@ fn cases() -> Vec<(&'static str, Hidden)> {
                 ..Hidden::default()
             },
         ),
+        (
+            "backlash 0.03 rad",
+            Hidden {
+                backlash: Some((6e-5, 0.03)),
+                ..Hidden::default()
+            },
+        ),
     ]
 }
 
@@ -384,6 +433,58 @@ fn at_floor(ex: &Explanation, text: &str) {
             o.rms_after / o.noise_floor
         );
     }
+}
+
+#[test]
+fn backlash_in_the_drive_is_named_with_its_gap_and_the_inertia_behind_it() {
+    let rec = record(&case("backlash 0.03 rad"), 2e-3, 0.0, 17);
+    // The sensors' noise, as their maker states it (2e-3 of each range).
+    let noise = ["i", "omega"].map(|name| {
+        let y = &rec.signal(name).unwrap().values;
+        (
+            name.to_string(),
+            2e-3 * y.iter().fold(0.0_f64, |m, v| m.max(v.abs())),
+        )
+    });
+    let opts = ExplainOptions {
+        noise: noise.into_iter().collect(),
+        ..ExplainOptions::default()
+    };
+    let ex = explain(&motor_model(), &rec, &opts).unwrap();
+    let (ids, _, text) = chosen(&ex);
+    println!("{text}");
+    // The generator's contact is Hunt–Crossley (k δ^1.5 with damping λ δ^1.5 δ̇), the
+    // candidate's a power law damped at a fixed ratio: the gap and the inertia behind it
+    // are what must come out. Where in the gap the load sits is a state no force holds, so
+    // an open-loop simulation's small errors there stay: the verdict is honest about what
+    // is left (partial at 1.3x the floor, measured), not claimed at the floor.
+    assert_eq!(
+        ids.first().map(String::as_str),
+        Some("backlash@1m"),
+        "{text}"
+    );
+    let first: Vec<(String, f64)> = (ex.chosen[0].params.iter())
+        .map(|p| (p.name.clone(), p.value))
+        .collect();
+    within(value(&first, "b", &text), 0.03, 0.1, &text);
+    within(value(&first, "J2", &text), 6e-5, 0.05, &text);
+    // What lies above the floor falls at least threefold on each output (measured: 8x on
+    // the current, 3.5x on the speed).
+    let excess = |rms: f64, floor: f64| (rms * rms - floor * floor).max(0.0).sqrt();
+    for o in &ex.outputs {
+        assert!(
+            excess(o.rms_after, o.noise_floor) < excess(o.rms_before, o.noise_floor) / 3.0,
+            "{}:\n{text}",
+            o.name
+        );
+    }
+    assert!(
+        matches!(
+            ex.verdict,
+            Verdict::EffectFound | Verdict::TwoEffects | Verdict::Partial
+        ),
+        "{text}"
+    );
 }
 
 #[test]

@@ -207,10 +207,13 @@ impl BondModel {
                 Some(steady_start(&graph, &model, rec, base)?)
             }
         };
+        // A contact that closes and opens is followed by adaptive steps, even in the copy
+        // for fitting (its fixed step was checked on the model without it).
+        let adaptive = (effects.iter()).any(|(c, _)| crate::effects::needs_adaptive_steps(c));
         let opts = SimOptions {
             rtol: RTOL,
             atol: ATOL,
-            fixed_step: self.fixed_step,
+            fixed_step: self.fixed_step.filter(|_| !adaptive),
             initial_state,
             changes,
             ..SimOptions::default()

@@ -8,9 +8,9 @@ use super::edit::bad;
 use super::scales::Scales;
 use super::tag::Tag;
 use super::{
-    ActuatorGain, ActuatorLimit, Brush, Calibration, Cogging, Coulomb, Coupling, DeadZone,
-    Declared, Deviation, Factor, Fault, Faulted, Heating, Inertia, Inflow, Junction, LawEffect,
-    Leak, Load, Node, Orifice, Overflow, Saturation, SensorClip, SensorDelay, SensorLag,
+    ActuatorGain, ActuatorLimit, Backlash, Brush, Calibration, Cogging, Coulomb, Coupling,
+    DeadZone, Declared, Deviation, Factor, Fault, Faulted, Heating, Inertia, Inflow, Junction,
+    LawEffect, Leak, Load, Node, Orifice, Overflow, Saturation, SensorClip, SensorDelay, SensorLag,
     SensorOffset, SensorScale, Stiffness, Store, Viscous,
 };
 use crate::error::{BondError, Result};
@@ -36,6 +36,8 @@ pub enum BondEffect {
     Inertia(Inertia),
     /// `coupling@<j>`: a flexible coupling to a second inertia.
     Coupling(Coupling),
+    /// `backlash@<j>`: part of the inertia behind a gap.
+    Backlash(Backlash),
     /// `cogging@<j>`: cogging torque.
     Cogging(Cogging),
     /// `brush@<j>`: a brush/contact voltage drop.
@@ -99,6 +101,7 @@ from_kind!(
     Load,
     Inertia,
     Coupling,
+    Backlash,
     Cogging,
     Brush,
     Saturation,
@@ -360,6 +363,7 @@ impl BondEffect {
             Tag::Load => Load::at(junction()?).map(Into::into),
             Tag::Inertia => Inertia::at(junction()?).map(Into::into),
             Tag::Coupling => Coupling::at(junction()?).map(Into::into),
+            Tag::Backlash => Backlash::at(junction()?).map(Into::into),
             Tag::Cogging => Cogging::at(junction()?).map(Into::into),
             Tag::Brush => Brush::at(junction()?).map(Into::into),
             Tag::Law => Some(BondEffect::Law(LawEffect::read(g, target).ok_or_else(
@@ -391,6 +395,7 @@ impl BondEffect {
             BondEffect::Load(k) => k,
             BondEffect::Inertia(k) => k,
             BondEffect::Coupling(k) => k,
+            BondEffect::Backlash(k) => k,
             BondEffect::Cogging(k) => k,
             BondEffect::Brush(k) => k,
             BondEffect::Saturation(k) => k,
@@ -424,6 +429,7 @@ impl BondEffect {
             | BondEffect::Load(Load { junction })
             | BondEffect::Inertia(Inertia { junction })
             | BondEffect::Coupling(Coupling { junction })
+            | BondEffect::Backlash(Backlash { junction })
             | BondEffect::Cogging(Cogging { junction })
             | BondEffect::Brush(Brush { junction }) => Some(*junction),
             BondEffect::Deviation(_)
@@ -490,6 +496,7 @@ impl BondEffect {
             Tag::Load => Load::vanishing_values(c),
             Tag::Inertia => Inertia::vanishing_values(c),
             Tag::Coupling => Coupling::vanishing_values(c),
+            Tag::Backlash => Backlash::vanishing_values(c),
             Tag::Cogging => Cogging::vanishing_values(c),
             Tag::Brush => Brush::vanishing_values(c),
             Tag::Saturation => Saturation::vanishing_values(c),
@@ -511,6 +518,15 @@ impl BondEffect {
             Tag::Law => LawEffect::vanishing_values(c),
         }
     }
+}
+
+/// Whether a candidate adds dynamics a fixed step checked on the model
+/// without it cannot follow: a contact that closes and opens (backlash)
+/// switches a stiff mode on and off, and a linearly implicit step that starts
+/// in the gap and ends in contact blows up. Such a candidate is simulated with
+/// adaptive steps even by a model's copy for fitting.
+pub fn needs_adaptive_steps(c: &Candidate) -> bool {
+    matches!(Tag::read(&c.id), Some((Tag::Backlash, _)))
 }
 
 /// The error for a candidate no kind of this model takes.

@@ -7,9 +7,9 @@ use super::bond_effect::BondEffect;
 use super::def::EffectDef;
 use super::scales::Scales;
 use super::{
-    ActuatorGain, ActuatorLimit, Brush, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation,
-    Factor, Fault, Heating, Inertia, Inflow, Leak, Load, Orifice, Overflow, Saturation, SensorClip,
-    SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness, Store, Viscous,
+    ActuatorGain, ActuatorLimit, Backlash, Brush, Cogging, Coulomb, Coupling, DeadZone, Declared,
+    Deviation, Factor, Fault, Heating, Inertia, Inflow, Leak, Load, Orifice, Overflow, Saturation,
+    SensorClip, SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness, Store, Viscous,
 };
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
@@ -118,6 +118,7 @@ pub fn offered(g: &BondGraph) -> Vec<BondEffect> {
         .chain(of::<Load>(g))
         .chain(of::<Inertia>(g))
         .chain(of::<Coupling>(g))
+        .chain(of::<Backlash>(g))
         .chain(of::<Cogging>(g))
         .collect();
     on_junctions.sort_by_key(|e| e.junction().map(|j| j.id));

@@ -23,7 +23,8 @@
 //!
 //! - rotational and translational 1-junctions: viscous friction, Coulomb
 //!   friction (smoothed), a constant load, extra inertia, a flexible coupling
-//!   to a second inertia; rotational ones also cogging torque;
+//!   to a second inertia, backlash (part of the inertia behind a gap);
+//!   rotational ones also cogging torque;
 //! - electrical 1-junctions: a brush/contact voltage drop;
 //! - each electrical I with a linear law: magnetic saturation.
 //!
@@ -51,7 +52,8 @@
 //! - [`deviation`](Deviation) (`deviation:<p>`), [`factor`](Factor) (`deviation:<u>`,
 //!   a modulus input), [`fault`](Fault) (`fault:<p>`, `fault:<u>`);
 //! - on junctions: [`viscous`](Viscous), [`coulomb`](Coulomb), [`load`](Load),
-//!   [`inertia`](Inertia), [`coupling`](Coupling), [`cogging`](Cogging),
+//!   [`inertia`](Inertia), [`coupling`](Coupling), [`backlash`](Backlash),
+//!   [`cogging`](Cogging),
 //!   [`brush`](Brush); on an I: [`saturation`](Saturation); on an electrical R:
 //!   [`heating`](Heating) (it rises with the energy it dissipates); on a C, in any
 //!   domain: [`stiffness`](Stiffness) (a cubic term); on storage nodes
@@ -79,6 +81,7 @@
 //! edits share: fresh names, new parameters, attached one-ports) and
 //! `scales` ([`Scales`]: the model's own scales).
 
+mod backlash;
 mod bond_effect;
 mod brush;
 mod calibration;
@@ -124,7 +127,8 @@ use crate::error::Result;
 use crate::graph::BondGraph;
 use crate::simulate::ParamChange;
 
-pub use bond_effect::BondEffect;
+pub use backlash::Backlash;
+pub use bond_effect::{BondEffect, needs_adaptive_steps};
 pub use brush::Brush;
 pub use calibration::Calibration;
 pub use clip::SensorClip;

@@ -14,6 +14,7 @@ pub(super) enum Tag {
     Load,
     Inertia,
     Coupling,
+    Backlash,
     Cogging,
     Brush,
     Saturation,
@@ -38,7 +39,7 @@ pub(super) enum Tag {
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 28] = [
+const PREFIXES: [(Tag, &str); 29] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -46,6 +47,7 @@ const PREFIXES: [(Tag, &str); 28] = [
     (Tag::Load, "load@"),
     (Tag::Inertia, "inertia@"),
     (Tag::Coupling, "coupling@"),
+    (Tag::Backlash, "backlash@"),
     (Tag::Cogging, "cogging@"),
     (Tag::Brush, "brush@"),
     (Tag::Saturation, "saturation@"),
@@ -125,7 +127,7 @@ mod tests {
     fn the_expected_prefixes_read_as_a_list() {
         assert_eq!(
             Tag::expected(),
-            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, cogging@, brush@, saturation@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@, gain@, limit@, lag@, offset@, clip@, scale@, delay@, declared: or law@"
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, backlash@, cogging@, brush@, saturation@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@, gain@, limit@, lag@, offset@, clip@, scale@, delay@, declared: or law@"
         );
     }
 }

@@ -91,6 +91,9 @@ pub(super) fn held_out(
     })
 }
 
+/// A free parameter by name, and whether it acts in both halves.
+type Acting = (String, bool);
+
 /// The samples in each half of the recording.
 pub(super) fn half_sizes(target: &Target) -> [usize; 2] {
     let n = target.rec.len();
@@ -105,7 +108,7 @@ pub(super) fn half_sizes(target: &Target) -> [usize; 2] {
 fn two_fold(
     target: &Target,
     effects: &[(&Candidate, &[f64])],
-) -> Option<([f64; 2], Vec<(String, bool)>)> {
+) -> Option<([f64; 2], Vec<Acting>)> {
     let m = target.n_residuals();
     let mut r0 = vec![0.0; m];
     target.residuals(effects, &mut r0).ok()?;
@@ -160,7 +163,7 @@ fn two_fold(
             }
         })
         .collect();
-    let acting: Vec<(String, bool)> = (free.iter().zip(&shares))
+    let acting: Vec<Acting> = (free.iter().zip(&shares))
         .map(|(&(e, i), sh)| {
             let name = effects[e].0.params[i].name.clone();
             (name, sh[0] >= ACTS_IN_HALF && sh[1] >= ACTS_IN_HALF)
@@ -206,7 +209,10 @@ fn half_step(columns: &[Vec<f64>], r: &[f64], train: impl Fn(usize) -> bool) -> 
     let mut jtr = nalgebra::DVector::<f64>::zeros(k);
     for a in 0..k {
         for b in 0..=a {
-            let v: f64 = rows.iter().map(|&row| columns[a][row] * columns[b][row]).sum();
+            let v: f64 = rows
+                .iter()
+                .map(|&row| columns[a][row] * columns[b][row])
+                .sum();
             jtj[(a, b)] = v;
             jtj[(b, a)] = v;
         }
@@ -249,7 +255,10 @@ mod tests {
         assert_eq!(d[1], 0.0);
         // Trained on all rows, both move.
         let d = half_step(&columns, &r, |_| true);
-        assert!((d[0] - 2.0).abs() < 1e-12 && (d[1] + 2.0).abs() < 1e-12, "{d:?}");
+        assert!(
+            (d[0] - 2.0).abs() < 1e-12 && (d[1] + 2.0).abs() < 1e-12,
+            "{d:?}"
+        );
     }
 
     #[test]

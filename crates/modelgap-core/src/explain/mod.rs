@@ -882,9 +882,13 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
     let gain = |i: usize| cost_before - screen_cost(i);
     let best_screened = order.first().map_or(0.0, |&i| gain(i));
     let worth = |i: usize, reference: f64| gain(i) >= CONFIRM_SHARE * reference;
+    // A candidate with a grid is screened from its grid's best point, not from 0: its screen
+    // sizes it, and it is confirmed on its screen's merit (the play in a drive, whose fit
+    // simulates a contact with adaptive steps, is not confirmed beside every law).
+    let gridded = |c: &Candidate| c.params.iter().any(|p| p.grid > 0);
     let always = |i: usize| {
         screens[i].0.id.starts_with("law@")
-            || failing.contains(&screens[i].0.acts_on.as_str())
+            || (failing.contains(&screens[i].0.acts_on.as_str()) && !gridded(&screens[i].0))
             || screens[i].1.is_err()
     };
     let top = |i: usize| {
@@ -953,12 +957,14 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
     } else {
         fitted
             .into_iter()
-            .map(|f| match laws.iter().find(|(c, _)| c.id == f.candidate.id) {
-                Some((_, law)) if law.terms.len() > 1 && f.error.is_none() && !f.screened => {
-                    simplest_law(&target, law, f, &base_weighted, opts)
-                }
-                _ => f,
-            })
+            .map(
+                |f| match laws.iter().find(|(c, _)| c.id == f.candidate.id) {
+                    Some((_, law)) if law.terms.len() > 1 && f.error.is_none() && !f.screened => {
+                        simplest_law(&target, law, f, &base_weighted, opts)
+                    }
+                    _ => f,
+                },
+            )
             .collect()
     };
     clock.lap("simplest-law");
@@ -1114,15 +1120,15 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
                 if cancelled() {
                     break;
                 }
-                let pair = match second_effect(&target, opts, &pool, first, reference, &base_weighted)
-                {
-                    Second::Kept(pair, weighted) => Some((pair, weighted)),
-                    Second::NotHeldOut(why) => {
-                        not_held_out.push(why);
-                        None
-                    }
-                    Second::None => None,
-                };
+                let pair =
+                    match second_effect(&target, opts, &pool, first, reference, &base_weighted) {
+                        Second::Kept(pair, weighted) => Some((pair, weighted)),
+                        Second::NotHeldOut(why) => {
+                            not_held_out.push(why);
+                            None
+                        }
+                        Second::None => None,
+                    };
                 // The pair with the most evidence over the best single (its gain counts every
                 // parameter the pair adds, so a smoother law with one more parameter does not
                 // win by a hair over the menu's effect).

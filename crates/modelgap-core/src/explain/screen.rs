@@ -885,8 +885,14 @@ fn products(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
                         ),
                     ],
                     vec![
-                        v.iter().zip(&angle).map(|(x, q)| x * (k * q).sin()).collect(),
-                        v.iter().zip(&angle).map(|(x, q)| x * (k * q).cos()).collect(),
+                        v.iter()
+                            .zip(&angle)
+                            .map(|(x, q)| x * (k * q).sin())
+                            .collect(),
+                        v.iter()
+                            .zip(&angle)
+                            .map(|(x, q)| x * (k * q).cos())
+                            .collect(),
                     ],
                 ));
             }
