@@ -603,6 +603,17 @@ impl Model for BondModel {
             .map_err(|e| model_error(effects, e))
     }
 
+    /// Where the edit leaves the graph and its changes as they are (a
+    /// parameter at its current value). Not merely at the values at which its
+    /// kind does nothing: a saturation of 0 still makes the inductor's law
+    /// nonlinear, and a linear graph is simulated another way (exactly), so
+    /// the two predictions differ at the solver's tolerance — which a
+    /// finite difference divides by its step.
+    fn vanishes(&self, c: &Candidate, values: &[f64]) -> bool {
+        self.edited(&[(c, values)])
+            .is_ok_and(|(g, changes)| g == self.graph && changes == self.changes)
+    }
+
     fn law_candidate(&self, law: &modelgap_core::explain::screen::Law) -> Option<Candidate> {
         crate::effects::law_candidate(&self.graph, law)
     }

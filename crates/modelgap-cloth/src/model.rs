@@ -1035,6 +1035,13 @@ impl Model for ClothModel {
         Some(FD_STEP)
     }
 
+    /// Where the edit leaves the scene as it is (a point mass of 0 kg, a
+    /// drag coefficient at its current value).
+    fn vanishes(&self, c: &Candidate, values: &[f64]) -> bool {
+        self.edited(&[(c, values)])
+            .is_ok_and(|edited| format!("{edited:?}") == format!("{:?}", self.scene))
+    }
+
     fn with_effects(&self, effects: &[Effect]) -> modelgap_core::Result<Box<dyn Model>> {
         let pairs: Vec<(&Candidate, &[f64])> = effects
             .iter()

@@ -213,6 +213,15 @@ pub trait Model: Send + Sync {
         "txt"
     }
 
+    /// Whether candidate `c` at `values` leaves the model exactly as it is (a
+    /// point mass of 0 kg, a parameter at its current value): a screen then
+    /// reuses the nominal prediction instead of simulating it again. `false`
+    /// (the default) when the model cannot tell.
+    fn vanishes(&self, c: &Candidate, values: &[f64]) -> bool {
+        let _ = (c, values);
+        false
+    }
+
     /// The model as fits on `rec` should simulate it: the same predictions
     /// (within a small, checked tolerance), computed so that they are a
     /// smooth function of every parameter a fit moves. An adaptive ODE solver

@@ -105,10 +105,7 @@ pub(super) fn half_sizes(target: &Target) -> [usize; 2] {
 /// the other half (one Gauss–Newton step from `effects`' values, the
 /// parameters the other half hardly sees held), and for each free parameter
 /// whether it acts in both halves.
-fn two_fold(
-    target: &Target,
-    effects: &[(&Candidate, &[f64])],
-) -> Option<([f64; 2], Vec<Acting>)> {
+fn two_fold(target: &Target, effects: &[(&Candidate, &[f64])]) -> Option<([f64; 2], Vec<Acting>)> {
     let m = target.n_residuals();
     let mut r0 = vec![0.0; m];
     target.residuals(effects, &mut r0).ok()?;

@@ -74,6 +74,9 @@ const CONFIRM: usize = 6;
 /// Of those, a candidate is confirmed only when the screen says it removes at least this
 /// share of what the best removes (the screen's best, then the best confirmed fit's).
 const CONFIRM_SHARE: f64 = 0.25;
+/// When the best confirmed fit is at the floor, a candidate is still confirmed when the
+/// screen says it removes at least this share of what that fit removes.
+const NEAR_SHARE: f64 = 0.9;
 /// Second effects confirmed on top of each first, the best of their screen.
 const PAIR_CONFIRM: usize = 3;
 /// The second effect is sought among this many of the best singles (and every law found).
@@ -391,6 +394,10 @@ struct Target<'a> {
     /// multiplied by in every fit (0 until the calibration has measured the
     /// residual; see [`crate::calibrate()`] for the weighing).
     prior_weight: f64,
+    /// The weighted residual of `model` as calibrated, once known: a screen's
+    /// start where a candidate vanishes ([`Model::vanishes`]) is not simulated
+    /// again.
+    nominal: Option<Vec<f64>>,
 }
 
 impl Target<'_> {
@@ -763,6 +770,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         floors,
         calibration: None,
         prior_weight: 0.0,
+        nominal: None,
     };
     // The model's free parameters: calibrated first, then fitted again with
     // every candidate (the verdict is about the calibrated model).
@@ -825,10 +833,11 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         .filter(|(_, f)| f.kind == FloorKind::SignalContent)
         .map(|(n, _)| format!("`{n}`"))
         .collect();
-    let target = target;
     let n = target.n_residuals();
     let mut base_weighted = vec![0.0; n];
     target.residuals(&[], &mut base_weighted)?;
+    target.nominal = Some(base_weighted.clone());
+    let target = target;
     let cost_before = 0.5 * base_weighted.iter().map(|r| r * r).sum::<f64>();
     let rms_before = target.rms_per_output(&base_weighted);
     let mut judge = Judge::new(&target, opts);
@@ -858,7 +867,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         .par_iter()
         .map(|c| {
             let c = prepared(c, rec);
-            let s = screen_candidate(&target, &[], &c, opts);
+            let s = screen_candidate(&target, &[], None, &c, opts);
             (c, s)
         })
         .collect();
@@ -897,8 +906,10 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             .position(|&o| o == i)
             .is_some_and(|r| r < CONFIRM)
     };
+    // Round one: the screen's best, every law, and what must be confirmed where a law was
+    // found. The rest of the few wait for its answer.
     let mut confirmed: Vec<bool> = (0..screens.len())
-        .map(|i| always(i) || (top(i) && worth(i, best_screened)))
+        .map(|i| always(i) || order.first() == Some(&i))
         .collect();
     let mut total = confirmed.iter().filter(|c| **c).count();
     clock.lap("screen-menu");
@@ -925,14 +936,27 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         .into_par_iter()
         .map(|i| fit_one(i, confirmed[i], total))
         .collect();
-    // The second round: what the screen left out that the best confirmed fit's own gain
-    // (lower than its screen's, when the linearised step oversized it) makes worth a fit.
-    let best_fitted = (fitted.iter())
+    // Round two: of the few the screen ranks best, those whose screened gain is a fair share
+    // of the best's screened gain or of the best confirmed fit's own gain (lower than its
+    // screen's, when the linearised step oversized it). When the best confirmed fit already
+    // leaves what noise leaves, only those the screen puts near it are fitted: one that could
+    // do as well (the same physics said another way); the rest keep the screen's size.
+    let best_fit = (fitted.iter())
         .filter(|(f, _)| !f.screened && f.error.is_none())
-        .map(|(f, _)| cost_before - f.cost)
-        .fold(0.0, f64::max);
+        .min_by(|a, b| a.0.cost.total_cmp(&b.0.cost));
+    let best_fitted = best_fit.map_or(0.0, |(f, _)| cost_before - f.cost);
+    let settled = best_fit.is_some_and(|(f, _)| {
+        f.cost < cost_before && all_at_floor(&judge.judge(&f.weighted), opts.floor_factor)
+    });
     let again: Vec<usize> = (0..screens.len())
-        .filter(|&i| !confirmed[i] && top(i) && worth(i, best_fitted))
+        .filter(|&i| !confirmed[i] && top(i))
+        .filter(|&i| {
+            if settled {
+                gain(i) >= NEAR_SHARE * best_fitted
+            } else {
+                worth(i, best_screened) || worth(i, best_fitted)
+            }
+        })
         .collect();
     total += again.len();
     let refitted: Vec<(usize, (Fitted, bool))> = (again.par_iter())
@@ -1116,19 +1140,31 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
                 .collect();
             let mut second: Option<(Vec<RankedCandidate>, Vec<f64>)> = None;
             let mut not_held_out: Vec<String> = Vec::new();
+            // Each first's seconds are screened on top of it, and its best few fitted jointly
+            // with it. (Dropping a first or a second by what the screen on top says it gains
+            // made the motor's brush drop beside Coulomb friction lose to a dead zone beside
+            // it: from 0, a linearised step undersizes Coulomb friction.)
             for first in firsts {
                 if cancelled() {
                     break;
                 }
-                let pair =
-                    match second_effect(&target, opts, &pool, first, reference, &base_weighted) {
-                        Second::Kept(pair, weighted) => Some((pair, weighted)),
-                        Second::NotHeldOut(why) => {
-                            not_held_out.push(why);
-                            None
-                        }
-                        Second::None => None,
-                    };
+                let own = residual_of(&first.candidate.id);
+                let screened = screen_seconds(&target, opts, &pool, first, own);
+                let pair = match second_effect(
+                    &target,
+                    opts,
+                    first,
+                    screened,
+                    reference,
+                    &base_weighted,
+                ) {
+                    Second::Kept(pair, weighted) => Some((pair, weighted)),
+                    Second::NotHeldOut(why) => {
+                        not_held_out.push(why);
+                        None
+                    }
+                    Second::None => None,
+                };
                 // The pair with the most evidence over the best single (its gain counts every
                 // parameter the pair adds, so a smoother law with one more parameter does not
                 // win by a hair over the menu's effect).

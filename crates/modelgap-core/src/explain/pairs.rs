@@ -18,20 +18,21 @@ pub(super) enum Second {
     None,
 }
 
-/// A second effect on top of `best`: every other candidate fitted jointly
-/// with it (both sets of parameters free, the second started from its own
-/// best fit on top of the first). Returns the pair, ranked, and the joint
-/// residual when the best pair's gain over `reference` (the weighted residual
-/// of the best single effect) is significant and it lowers the held-out error.
-pub(super) fn second_effect(
+/// A second effect screened on top of a first: the cost its linearised step
+/// reaches, the candidate, and the step.
+pub(super) type Screened = (f64, Candidate, Start);
+
+/// Every other candidate, and the laws discovery finds on what `best` leaves,
+/// screened on top of it (one linearised step each), best first.
+/// `first_weighted`, the first's own weighted residual, spares the screen a
+/// simulation per start where a second vanishes.
+pub(super) fn screen_seconds(
     target: &Target,
     opts: &ExplainOptions,
     candidates: &[Candidate],
     best: &RankedCandidate,
-    reference: &[f64],
-    base_weighted: &[f64],
-) -> Second {
-    let n = target.n_residuals();
+    first_weighted: Option<&[f64]>,
+) -> Vec<Screened> {
     let first = best.effect();
     // The laws of what the first leaves: the missing effort estimated again with the first
     // built in (a Stribeck dip that Coulomb friction leaves at each reversal).
@@ -41,18 +42,42 @@ pub(super) fn second_effect(
         .chain(&rediscovered)
         .filter(|c| c.id != first.candidate.id && !best.equivalent.contains(&c.id))
         .collect();
-    let first_c = prepared(&first.candidate, target.rec);
-    // Screened on top of the first (one linearised step each), the best few confirmed.
     let base = std::slice::from_ref(&first);
-    let mut screened: Vec<(f64, Candidate, Start)> = others
+    // The first's residual is of the model the screen simulates only when there is no copy
+    // for fitting, and the calibration is the one the screen holds.
+    let beneath =
+        first_weighted.filter(|_| target.accurate.is_none() && best.calibration.is_none());
+    let mut screened: Vec<Screened> = others
         .par_iter()
         .filter_map(|c| {
             let c = prepared(c, target.rec);
-            let s = screen_candidate(target, base, &c, opts).ok()?;
+            let s = screen_candidate(target, base, beneath, &c, opts).ok()?;
             Some((s.cost, c, s))
         })
         .collect();
     screened.sort_by(|a, b| a.0.total_cmp(&b.0));
+    screened
+}
+
+/// A second effect on top of `best`: every other candidate fitted jointly
+/// with it (both sets of parameters free, the second started from its own
+/// best fit on top of the first). Returns the pair, ranked, and the joint
+/// residual when the best pair's gain over `reference` (the weighted residual
+/// of the best single effect) is significant and it lowers the held-out error.
+/// `screened`: the seconds [`screen_seconds`] found on top of `best`.
+pub(super) fn second_effect(
+    target: &Target,
+    opts: &ExplainOptions,
+    best: &RankedCandidate,
+    mut screened: Vec<Screened>,
+    reference: &[f64],
+    base_weighted: &[f64],
+) -> Second {
+    let n = target.n_residuals();
+    let first = best.effect();
+    let first_c = prepared(&first.candidate, target.rec);
+    let reference_cost = 0.5 * reference.iter().map(|r| r * r).sum::<f64>();
+    // The best few of the screen on top of the first, fitted jointly with it.
     screened.truncate(PAIR_CONFIRM);
     let pairs: Vec<(Fitted, Fitted)> = screened
         .into_par_iter()
@@ -126,7 +151,6 @@ pub(super) fn second_effect(
     };
     // The simplest of the pairs that leave the same (a wind fitted at 0.01 m/s beside the
     // drag it carries is still air): fewest parameters, then the most evidence.
-    let reference_cost = 0.5 * reference.iter().map(|r| r * r).sum::<f64>();
     let best_cost = best_second.cost;
     let alike =
         |f: &Fitted| f.cost - best_cost <= SAME_EXPLANATION * (reference_cost - best_cost).max(0.0);
