@@ -939,12 +939,14 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
     // Round two: of the few the screen ranks best, those whose screened gain is a fair share
     // of the best's screened gain or of the best confirmed fit's own gain (lower than its
     // screen's, when the linearised step oversized it). When the best confirmed fit already
-    // leaves what noise leaves, only those the screen puts near it are fitted: one that could
-    // do as well (the same physics said another way); the rest keep the screen's size.
+    // leaves what noise leaves, only those the screen puts near it, or simpler ones worth a
+    // fit, are fitted: one that could do as well (the same physics said another way); the
+    // rest keep the screen's size.
     let best_fit = (fitted.iter())
         .filter(|(f, _)| !f.screened && f.error.is_none())
         .min_by(|a, b| a.0.cost.total_cmp(&b.0.cost));
     let best_fitted = best_fit.map_or(0.0, |(f, _)| cost_before - f.cost);
+    let best_size = best_fit.map_or(usize::MAX, |(f, _)| f.candidate.params.len());
     let settled = best_fit.is_some_and(|(f, _)| {
         f.cost < cost_before && all_at_floor(&judge.judge(&f.weighted), opts.floor_factor)
     });
@@ -952,7 +954,10 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         .filter(|&i| !confirmed[i] && top(i))
         .filter(|&i| {
             if settled {
+                // A simpler statement may explain as much (still-air drag beside a wind
+                // fitted at nearly no speed): its screen, from 0, may undersize it.
                 gain(i) >= NEAR_SHARE * best_fitted
+                    || (screens[i].0.params.len() < best_size && worth(i, best_fitted))
             } else {
                 worth(i, best_screened) || worth(i, best_fitted)
             }
