@@ -42,6 +42,8 @@ const MAX_SAMPLES: usize = 4000;
 const MAX_BLOCKS: usize = 4;
 /// A term joins a law only if it removes at least this share of what the law leaves.
 const MIN_SHARE: f64 = 0.1;
+/// A product of two signals joins a law only if it removes at least this share.
+const PRODUCT_MIN_SHARE: f64 = 0.33;
 /// Harmonics of an angle up to this order.
 const MAX_HARMONIC: usize = 24;
 /// Interior points of a step's or a ramp's time scan.
@@ -1087,8 +1089,15 @@ pub fn screen_with(m: &MissingSignal, linear: bool) -> Option<Law> {
         let k_new = (b.columns.len() + shaped) as f64;
         let gain = n_eff * (rss / new_rss.max(1e-300)).ln();
         let cost = k_new * n_eff.max(2.0).ln() + 2.0 * (b.scanned as f64).ln();
-        // Significant and worth a term: it removes a tenth of what is left at least.
-        if gain.is_nan() || gain <= cost || new_rss > (1.0 - MIN_SHARE) * rss {
+        // Significant and worth a term: it removes a tenth of what is left at least (a
+        // product a third: two signals multiplied mimic much — on Silverbox `v²·q` took a
+        // share of the cubic spring's and of an input filter's error beside it).
+        let share = if b.family == Family::Product {
+            PRODUCT_MIN_SHARE
+        } else {
+            MIN_SHARE
+        };
+        if gain.is_nan() || gain <= cost || new_rss > (1.0 - share) * rss {
             break;
         }
         // A law holds on both halves: the new block's share agrees in sign and size.
