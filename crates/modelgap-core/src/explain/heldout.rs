@@ -61,10 +61,20 @@ impl HeldOut {
     }
 }
 
-/// Whether a candidate is an event at one time (a step, a fault at `t`): a
-/// fit on the half before it cannot see it, so it has no held-out error.
-pub(super) fn is_timed(c: &Candidate) -> bool {
-    (c.params.iter()).any(|p| p.unit == "s" && p.name.starts_with('t'))
+/// Whether a candidate at `values` is an event inside the recording (a step,
+/// a fault at `t` more than a twentieth of the record from either end): a fit
+/// on the half before it cannot see it, so it has no held-out error. One at
+/// the record's very edge is a constant in disguise (a mass "changing" at
+/// 3 ms re-calibrates the mass) and is held out like any other.
+pub(super) fn is_event(c: &Candidate, values: &[f64], rec: &Recording) -> bool {
+    let t = rec.t();
+    let (Some(&t0), Some(&t1)) = (t.first(), t.last()) else {
+        return false;
+    };
+    let margin = 0.05 * (t1 - t0);
+    (c.params.iter().zip(values)).any(|(p, v)| {
+        p.unit == "s" && p.name.starts_with('t') && *v > t0 + margin && *v < t1 - margin
+    })
 }
 
 /// The held-out error of the model without and with an effect: `without`

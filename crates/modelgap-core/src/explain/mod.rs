@@ -1283,7 +1283,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
 /// cannot see.
 fn first_not_held_out(target: &Target, best: &RankedCandidate) -> Option<String> {
     let first = best.effect();
-    if heldout::is_timed(&first.candidate) {
+    if heldout::is_event(&first.candidate, &first.values, target.rec) {
         return None;
     }
     let calibration = target.calibration.as_ref().map(|c| (c, c.initial()));

@@ -176,7 +176,7 @@ pub(super) fn second_effect(
     // A law holds throughout: fitted on either half, the pair must predict the other half
     // better than the first alone (unless the second effect is itself an event at one time,
     // which a fit on the half before it cannot see).
-    if !heldout::is_timed(&second.candidate) {
+    if !heldout::is_event(&second.candidate, &second.values, target.rec) {
         let single = [(&first_c, first.values.as_slice())];
         let pair = [
             (&first_c, joint_first.values.as_slice()),
