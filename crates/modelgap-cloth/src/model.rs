@@ -172,6 +172,9 @@ pub struct ClothModel {
     stagnation: std::sync::Arc<std::sync::Mutex<Option<Stagnation>>>,
     /// Plain descriptions of the effects built in, for the file's header.
     added: Vec<String>,
+    /// The scene as text, taken once: what [`Model::vanishes`] compares an
+    /// edited scene with.
+    scene_text: std::sync::OnceLock<String>,
 }
 
 impl ClothModel {
@@ -183,6 +186,7 @@ impl ClothModel {
             settings: PredictSettings::default(),
             stagnation: std::sync::Arc::default(),
             added: Vec::new(),
+            scene_text: std::sync::OnceLock::new(),
         }
     }
 
@@ -1038,8 +1042,9 @@ impl Model for ClothModel {
     /// Where the edit leaves the scene as it is (a point mass of 0 kg, a
     /// drag coefficient at its current value).
     fn vanishes(&self, c: &Candidate, values: &[f64]) -> bool {
+        let nominal = self.scene_text.get_or_init(|| format!("{:?}", self.scene));
         self.edited(&[(c, values)])
-            .is_ok_and(|edited| format!("{edited:?}") == format!("{:?}", self.scene))
+            .is_ok_and(|edited| format!("{edited:?}") == *nominal)
     }
 
     fn with_effects(&self, effects: &[Effect]) -> modelgap_core::Result<Box<dyn Model>> {
@@ -1055,6 +1060,7 @@ impl Model for ClothModel {
             settings: self.settings.clone(),
             stagnation: std::sync::Arc::default(),
             added,
+            scene_text: std::sync::OnceLock::new(),
         }))
     }
 

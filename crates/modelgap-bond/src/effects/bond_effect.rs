@@ -569,6 +569,8 @@ mod tests {
             ("coulomb@1e", "not an effect of this model"),
             ("brush@1m", "not an effect of this model"),
             ("cogging@L", "'L' is not a 1-junction"),
+            ("backlash@zz", "no junction 'zz'"),
+            ("backlash@1e", "not an effect of this model"),
             ("deviation:zz", "no parameter or modulus input 'zz'"),
             ("fault:zz", "no parameter or modulus input 'zz'"),
             ("saturation@R", "no I element 'R'"),

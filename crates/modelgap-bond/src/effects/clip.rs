@@ -52,10 +52,7 @@ impl EffectDef for SensorClip {
     /// it does nothing; `lower` the same below zero; five grid starts each.
     fn candidate(&self, g: &BondGraph, scales: &Scales) -> Candidate {
         let o = &g.outputs()[self.output];
-        let peak = scales
-            .output_peak(&o.name)
-            .filter(|p| *p > 0.0)
-            .unwrap_or(1.0);
+        let peak = scales.output_peak(&o.name);
         let rail = |name: &str, start: f64, bounds: (f64, f64)| {
             EffectParam::new(name, &o.unit, start, bounds, 0.1 * peak).with_grid(RAIL_GRID)
         };

@@ -41,10 +41,7 @@ impl EffectDef for SensorOffset {
     /// recording's, when there is one), starting at 0; scale a hundredth of it.
     fn candidate(&self, g: &BondGraph, scales: &Scales) -> Candidate {
         let o = &g.outputs()[self.output];
-        let peak = scales
-            .output_peak(&o.name)
-            .filter(|p| *p > 0.0)
-            .unwrap_or(1.0);
+        let peak = scales.output_peak(&o.name);
         Candidate {
             id: Tag::Offset.id(&o.name),
             name: format!(

@@ -142,9 +142,12 @@ impl Scales {
         }
     }
 
-    /// The largest magnitude output `name` took over the run, if it was measured.
-    pub(super) fn output_peak(&self, name: &str) -> Option<f64> {
-        self.outputs.get(name).copied()
+    /// The largest magnitude output `name` took over the run, or 1 when it was
+    /// not measured or stayed at 0: the size a sensor effect's parameters scale with.
+    pub(super) fn output_peak(&self, name: &str) -> f64 {
+        (self.outputs.get(name).copied())
+            .filter(|p| *p > 0.0)
+            .unwrap_or(1.0)
     }
 
     /// The scales of `g` over `run`, a simulation driven by a recording's
