@@ -188,6 +188,11 @@ impl ResidualProblem for Problem<'_> {
         self.n_data() + self.priors.len()
     }
 
+    /// One series per output, then the priors.
+    fn series_length(&self) -> Option<usize> {
+        Some(self.rec.len())
+    }
+
     fn residuals(&self, values: &[f64], out: &mut [f64]) -> Result<()> {
         let (data, priors) = out.split_at_mut(self.n_data());
         self.scaled(values, &self.sd, data)?;
@@ -320,7 +325,10 @@ pub fn calibrate(
     problem.raw(&report.params, &mut raw)?;
     let rms_after = problem.rms(&raw);
     let effective_samples = effective(&raw);
-    let std_errors = report.scaled_std_errors(effective_samples, raw.len());
+    // The sandwich over the fit's residual: it holds for coloured noise and for the model
+    // error a calibration leaves (the white formula scaled by the residual's effective
+    // samples was tens of times too wide on a smooth residual).
+    let std_errors = report.robust_std_errors.clone();
     let values = (candidate.params.iter().enumerate())
         .map(|(i, p)| {
             let v = report.params[i];

@@ -360,16 +360,26 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
             );
             match &p.law {
                 Some(l) => {
+                    // A formula of the symbolic search is a shape, not a named law: say so.
+                    let how = if l.has_formula() {
+                        "regression on a typed library and on formulas a symbolic search \
+                         built (the formula names no physical law)"
+                    } else {
+                        "regression on a typed library"
+                    };
                     let _ = writeln!(
                         s,
-                        "      its law (regression on a typed library, {:.0} % of it): {} = {}",
+                        "      its law ({how}, {:.0} % of it): {} = {}",
                         100.0 * l.explained,
                         p.quantity.word(),
                         l.describe()
                     );
                 }
                 None => {
-                    let _ = writeln!(s, "      no law of the library explains it");
+                    let _ = writeln!(
+                        s,
+                        "      no law of the library, nor any formula of the symbolic search, explains it"
+                    );
                 }
             }
         }
@@ -636,10 +646,16 @@ fn missing_plots(ex: &Explanation) -> Vec<(String, String)> {
                 m.quantity.word(),
                 100.0 * place.explained,
                 law.map_or(
-                    "no law of the library explains it.".to_string(),
+                    "no law of the library, nor any formula of the symbolic search, explains it."
+                        .to_string(),
                     |l| format!(
-                        "the law found by regression ({:.0} % of it): {}.",
+                        "the law found by regression ({:.0} % of it{}): {}.",
                         100.0 * l.explained,
+                        if l.has_formula() {
+                            "; a formula of the symbolic search, no named law"
+                        } else {
+                            ""
+                        },
                         l.describe()
                     )
                 )

@@ -103,6 +103,11 @@ impl ResidualProblem for CandidateProblem<'_> {
         self.target.n_residuals() + self.priors.len()
     }
 
+    /// One series per output, then the priors.
+    fn series_length(&self) -> Option<usize> {
+        Some(self.target.rec.len())
+    }
+
     /// The data's weighted residuals, then one row per prior.
     fn residuals(&self, params: &[f64], out: &mut [f64]) -> Result<()> {
         let full = self.full(params);
@@ -139,6 +144,11 @@ impl ResidualProblem for PairProblem<'_> {
 
     fn n_residuals(&self) -> usize {
         self.target.n_residuals()
+    }
+
+    /// One series per output.
+    fn series_length(&self) -> Option<usize> {
+        Some(self.target.rec.len())
     }
 
     fn residuals(&self, params: &[f64], out: &mut [f64]) -> Result<()> {
@@ -782,6 +792,9 @@ fn fit_held(
     let std_errors = (0..n)
         .map(|i| slot(i).map_or(f64::INFINITY, |k| report.std_errors[k]))
         .collect();
+    let robust_std_errors = (0..n)
+        .map(|i| slot(i).map_or(f64::INFINITY, |k| report.robust_std_errors[k]))
+        .collect();
     let correlation = (0..n)
         .map(|i| {
             (0..n)
@@ -797,6 +810,7 @@ fn fit_held(
         FitReport {
             params,
             std_errors,
+            robust_std_errors,
             correlation,
             ..report
         },

@@ -26,6 +26,7 @@ pub mod estimate;
 mod heldout;
 mod pairs;
 pub mod screen;
+mod symbolic;
 
 use confirm::*;
 use pairs::*;
@@ -585,8 +586,7 @@ struct Whitening {
     cost_before: f64,
 }
 
-fn ranked(target: &Target, f: &Fitted, white: &Whitening, n_eff: f64, n: usize) -> RankedCandidate {
-    let scale_se = (n as f64 / n_eff.max(1.0)).sqrt();
+fn ranked(target: &Target, f: &Fitted, white: &Whitening) -> RankedCandidate {
     // A joint candidate: its own parameters, then the calibration's.
     let own = f.candidate.params.len() - target.n_calibration(&f.candidate);
     let mut candidate = f.candidate.clone();
@@ -609,9 +609,12 @@ fn ranked(target: &Target, f: &Fitted, white: &Whitening, n_eff: f64, n: usize) 
                 name: p.name.clone(),
                 unit: p.unit.clone(),
                 value: *v,
+                // The sandwich over the fit's own residual: it holds when that residual is
+                // coloured noise or a model error the fit leaves (the white formula scaled by
+                // effective samples of the noise was 45× too wide on smooth residuals).
                 std_error: match (at_bound, f.report.as_ref()) {
                     (None, Some(r)) => {
-                        r.std_errors.get(i).copied().unwrap_or(f64::INFINITY) * scale_se
+                        (r.robust_std_errors.get(i).copied()).unwrap_or(f64::INFINITY)
                     }
                     _ => f64::INFINITY,
                 },
@@ -1013,10 +1016,8 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         cost_before: target.whitened_cost(&base_weighted, &rhos),
         rhos,
     };
-    let mut ranking: Vec<RankedCandidate> = fitted
-        .iter()
-        .map(|f| ranked(&target, f, &white, n_eff, n))
-        .collect();
+    let mut ranking: Vec<RankedCandidate> =
+        fitted.iter().map(|f| ranked(&target, f, &white)).collect();
     order_ranking(&mut ranking, opts.significance, cost_before);
     let margin = match (ranking.first(), ranking.get(1)) {
         (Some(a), Some(b)) if b.score.is_finite() => a.score - b.score,
@@ -1407,23 +1408,24 @@ fn discover(
     missing.sort_by(|a, b| b.explained.total_cmp(&a.explained));
     clock.lap("estimate");
     let linear = target.calibration.is_none();
-    let laws: Vec<Option<screen::Law>> = missing
+    let laws: Vec<Vec<screen::Law>> = missing
         .par_iter()
-        .map(|m| screen::screen_with(m, linear))
+        .map(|m| screen::screen_laws(m, linear))
         .collect();
     clock.lap("screen");
     let mut places = Vec::new();
     let mut candidates = Vec::new();
     let best = missing.first().map_or(0.0, |m| m.explained);
-    for (m, law) in missing.iter().zip(laws) {
+    for (m, laws) in missing.iter().zip(laws) {
         // A place that removes little of what the best place removes is not where it fails.
-        if let Some(l) = law
-            .as_ref()
-            .filter(|_| m.explained >= 0.5 * best && m.explained > 0.05)
-            && let Some(c) = target.model.law_candidate(l)
-        {
-            candidates.push((c, l.clone()));
+        if m.explained >= 0.5 * best && m.explained > 0.05 {
+            for l in &laws {
+                if let Some(c) = target.model.law_candidate(l) {
+                    candidates.push((c, l.clone()));
+                }
+            }
         }
+        let law = laws.into_iter().next();
         places.push(estimate::PlaceFinding {
             location: m.location.clone(),
             place: m.place.clone(),

@@ -73,7 +73,6 @@ pub(super) fn second_effect(
     reference: &[f64],
     base_weighted: &[f64],
 ) -> Second {
-    let n = target.n_residuals();
     let first = best.effect();
     let first_c = prepared(&first.candidate, target.rec);
     let reference_cost = 0.5 * reference.iter().map(|r| r * r).sum::<f64>();
@@ -91,9 +90,11 @@ pub(super) fn second_effect(
                     let mut first_report = report.clone();
                     first_report.params = a.to_vec();
                     first_report.std_errors = report.std_errors[..a.len()].to_vec();
+                    first_report.robust_std_errors = report.robust_std_errors[..a.len()].to_vec();
                     let mut second_report = report.clone();
                     second_report.params = b.to_vec();
                     second_report.std_errors = report.std_errors[a.len()..].to_vec();
+                    second_report.robust_std_errors = report.robust_std_errors[a.len()..].to_vec();
                     let f1 = Fitted {
                         candidate: first_c.clone(),
                         values: a.to_vec(),
@@ -168,7 +169,6 @@ pub(super) fn second_effect(
     else {
         return Second::None;
     };
-    let n_eff2 = target.n_eff(&joint_first.weighted);
     let rhos2 = target.rhos(&joint_first.weighted);
     if gain <= opts.significance {
         return Second::None;
@@ -207,9 +207,9 @@ pub(super) fn second_effect(
         cost_before: target.whitened_cost(base_weighted, &rhos2),
         rhos: rhos2,
     };
-    let mut first_ranked = ranked(target, joint_first, &white2, n_eff2, n);
+    let mut first_ranked = ranked(target, joint_first, &white2);
     first_ranked.candidate = best.candidate.clone();
-    let mut second_ranked = ranked(target, second, &white2, n_eff2, n);
+    let mut second_ranked = ranked(target, second, &white2);
     second_ranked.score = gain;
     Second::Kept(
         vec![first_ranked, second_ranked],

@@ -20,6 +20,7 @@
 //! | ripple | `sin(2πx/λ)`, `cos(2πx/λ)`, λ scanned over 1/100 … 1/2 of the travel | positions |
 //! | step | `H(t − t₀)`, t₀ scanned | time |
 //! | ramp | `max(t − t₀, 0)`, t₀ scanned | time |
+//! | symbolic | a formula of the signals, built by the symbolic search (`symbolic.rs`) when the rest leaves the estimate well above its band | flows, positions, displacements, efforts |
 //!
 //! Selection is sparse and forward: the block (one term, or a harmonic's
 //! sine and cosine) that lowers the weighted residual most is added while
@@ -34,6 +35,7 @@
 use serde::Serialize;
 
 use super::estimate::{ActingSignal, MissingSignal, Quantity, SignalRole};
+use super::symbolic;
 
 /// At most this many samples enter the regression (the estimate is smooth;
 /// a longer record is decimated).
@@ -86,6 +88,10 @@ pub enum Family {
     /// grows with the displacement; `x·v`), or of one with a harmonic of the
     /// angle (`v·sin nθ`: friction that varies around a turn).
     Product,
+    /// A formula the symbolic search built from the signals at the place
+    /// when the typed library left the estimate well above its band: a
+    /// shape, reported as such, with no physical law named.
+    Symbolic,
 }
 
 impl Family {
@@ -106,6 +112,7 @@ impl Family {
             Family::Step => "a step at one time (a load or a fault)",
             Family::Ramp => "a drift from one time on",
             Family::Product => "a product of two signals (one modulates the other's effect)",
+            Family::Symbolic => "a formula the symbolic search found (no named law of the library)",
         }
     }
 }
@@ -251,6 +258,11 @@ impl Law {
         parts.join(" + ")
     }
 
+    /// Whether a term is a formula of the symbolic search ([`Family::Symbolic`]).
+    pub fn has_formula(&self) -> bool {
+        self.terms.iter().any(|t| t.family == Family::Symbolic)
+    }
+
     /// The families of its terms, in words (`a sign-like term …; a ripple …`).
     pub fn physics(&self) -> String {
         let mut seen: Vec<Family> = Vec::new();
@@ -278,7 +290,13 @@ struct Block {
     columns: Vec<Vec<f64>>,
 }
 
-fn term(param: &str, family: Family, label: String, expr: String, unit: String) -> LawTerm {
+pub(super) fn term(
+    param: &str,
+    family: Family,
+    label: String,
+    expr: String,
+    unit: String,
+) -> LawTerm {
     LawTerm {
         param: param.to_string(),
         family,
@@ -293,7 +311,14 @@ fn term(param: &str, family: Family, label: String, expr: String, unit: String) 
 }
 
 /// `t` with a shape parameter `stem` at `value` within [`lo`, `hi`].
-fn shaped(mut t: LawTerm, stem: &str, unit: &str, value: f64, lo: f64, hi: f64) -> LawTerm {
+pub(super) fn shaped(
+    mut t: LawTerm,
+    stem: &str,
+    unit: &str,
+    value: f64,
+    lo: f64,
+    hi: f64,
+) -> LawTerm {
     t.shape = Some(Shape {
         name: stem.to_string(),
         unit: unit.to_string(),
@@ -428,7 +453,7 @@ fn per(a: &str, b: &str) -> String {
 }
 
 /// Four significant digits, in exponent form when very small or large.
-fn sig(x: f64) -> String {
+pub(super) fn sig(x: f64) -> String {
     let a = x.abs();
     if a != 0.0 && !(1e-3..1e4).contains(&a) {
         format!("{x:.3e}")
@@ -437,11 +462,11 @@ fn sig(x: f64) -> String {
     }
 }
 
-fn num(x: f64) -> String {
+pub(super) fn num(x: f64) -> String {
     format!("{x:.4e}")
 }
 
-fn rms_of(x: &[f64]) -> f64 {
+pub(super) fn rms_of(x: &[f64]) -> f64 {
     (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
 }
 
@@ -979,20 +1004,28 @@ pub fn screen(m: &MissingSignal) -> Option<Law> {
 /// on a hardening one is stiffer than it is), and the law's coefficients are
 /// those it has beside a linear term that the joint fit re-adjusts.
 pub fn screen_with(m: &MissingSignal, linear: bool) -> Option<Law> {
+    screen_laws(m, linear).into_iter().next()
+}
+
+/// The laws the screen offers at a place, best first: [`screen_with`]'s,
+/// and a runner-up when a law starting from a formula of the symbolic
+/// search and the typed library's law are within the search's cost and one
+/// parameter of each other (the confirming fits by simulation decide).
+pub fn screen_laws(m: &MissingSignal, linear: bool) -> Vec<Law> {
     let n_all = m.value.len();
     if n_all < 20 || m.t.len() != n_all || m.band.len() != n_all {
-        return None;
+        return Vec::new();
     }
     let stride = n_all.div_ceil(MAX_SAMPLES).max(1);
     // The first and last few samples carry the smoother's start-up: left out.
     let skip = (n_all / 50).min(200);
     let idx: Vec<usize> = (skip..n_all - skip).step_by(stride).collect();
     if idx.len() < 20 {
-        return None;
+        return Vec::new();
     }
     let y: Vec<f64> = idx.iter().map(|&k| m.value[k]).collect();
     if y.iter().any(|v| !v.is_finite()) {
-        return None;
+        return Vec::new();
     }
     let mut bands: Vec<f64> = idx.iter().map(|&k| m.band[k]).collect();
     let median = {
@@ -1015,8 +1048,9 @@ pub fn screen_with(m: &MissingSignal, linear: bool) -> Option<Law> {
     // orthogonal to the nuisance below.
     let mut y = y;
     let mut raw: Vec<Vec<Vec<f64>>> = Vec::new();
+    let mut nuisance: Vec<Vec<f64>> = Vec::new();
     if !linear {
-        let nuisance: Vec<Vec<f64>> = (lib.iter())
+        nuisance = (lib.iter())
             .filter(|b| b.family == Family::Linear)
             .flat_map(|b| b.columns.iter().cloned())
             .collect();
@@ -1034,188 +1068,344 @@ pub fn screen_with(m: &MissingSignal, linear: bool) -> Option<Law> {
     }
     let y = y;
     let n = idx.len();
-    let half = n / 2;
     let total: f64 = (0..n).map(|r| w[r] * y[r] * y[r]).sum();
     if total.is_nan() || total <= 0.0 {
-        return None;
+        return Vec::new();
     }
-    let mut chosen: Vec<usize> = Vec::new();
-    let mut rss = total;
-    let mut residual = y.clone();
-    for _ in 0..MAX_BLOCKS {
-        let n_eff = effective(&residual);
-        let taken = |b: &Block| {
-            chosen.iter().any(|&c| {
-                let o = &lib[c];
-                o.family == b.family && (b.family != Family::Harmonic || o.member == b.member)
-            })
-        };
-        let mut best: Option<(usize, f64)> = None;
-        for (bi, b) in lib.iter().enumerate() {
-            if taken(b) {
-                continue;
-            }
-            let cols: Vec<&[f64]> = (chosen.iter().chain(std::iter::once(&bi)))
-                .flat_map(|&c| lib[c].columns.iter().map(Vec::as_slice))
-                .collect();
-            if let Some((_, _, r)) = wls(&cols, &y, &w)
-                && best.is_none_or(|(_, br)| r < br)
-            {
-                best = Some((bi, r));
-            }
-        }
-        let Some((bi, new_rss)) = best else { break };
-        let b = &lib[bi];
-        // The independent samples are those of what the law would leave (the estimate's own
-        // noise), not of what it explains: a missing flow that is a clean step is as smooth
-        // as a signal gets, and counted on itself it would be worth two samples.
-        let n_eff = {
-            let cols: Vec<&[f64]> = (chosen.iter().chain(std::iter::once(&bi)))
-                .flat_map(|&c| lib[c].columns.iter().map(Vec::as_slice))
-                .collect();
-            match wls(&cols, &y, &w) {
-                Some((beta, _, _)) => {
-                    let left: Vec<f64> = (0..n)
-                        .map(|r| y[r] - (0..beta.len()).map(|i| beta[i] * cols[i][r]).sum::<f64>())
-                        .collect();
-                    effective(&left).max(n_eff)
+    let typed = 0..lib.len();
+    let wsum = w.iter().sum::<f64>().max(1e-300);
+    // Forward selection over the typed library, from the blocks `chosen` (leaving `rss`).
+    let greedy = |lib: &[Block], mut chosen: Vec<usize>, mut rss: f64| -> (Vec<usize>, f64) {
+        while chosen.len() < MAX_BLOCKS {
+            let residual = left_by(lib, &chosen, &y, &w);
+            match next_block(lib, &chosen, typed.clone(), &y, &w, rss, &residual) {
+                Some((bi, r)) => {
+                    chosen.push(bi);
+                    rss = r;
                 }
-                None => n_eff,
-            }
-        };
-        // A shape the scan chose (a width, a Stribeck speed, a step's time) is a parameter
-        // the confirming fit frees: it counts as one.
-        let shaped = b.terms.iter().filter(|t| t.shape.is_some()).count();
-        let k_new = (b.columns.len() + shaped) as f64;
-        let gain = n_eff * (rss / new_rss.max(1e-300)).ln();
-        let cost = k_new * n_eff.max(2.0).ln() + 2.0 * (b.scanned as f64).ln();
-        // Significant and worth a term: it removes a tenth of what is left at least (a
-        // product a third: two signals multiplied mimic much — on Silverbox `v²·q` took a
-        // share of the cubic spring's and of an input filter's error beside it).
-        let share = if b.family == Family::Product {
-            PRODUCT_MIN_SHARE
-        } else {
-            MIN_SHARE
-        };
-        if gain.is_nan() || gain <= cost || new_rss > (1.0 - share) * rss {
-            break;
-        }
-        // A law holds on both halves: the new block's share agrees in sign and size.
-        if !matches!(b.family, Family::Step | Family::Ramp) {
-            let mut trial = chosen.clone();
-            trial.push(bi);
-            let agree = [0..half, half..n].map(|range| {
-                let cols: Vec<Vec<f64>> = (trial.iter())
-                    .flat_map(|&c| lib[c].columns.iter().map(|col| col[range.clone()].to_vec()))
-                    .collect();
-                let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
-                wls(&refs, &y[range.clone()], &w[range.clone()])
-            });
-            let [Some((a, _, _)), Some((c, _, _))] = agree else {
-                break;
-            };
-            let k = a.len();
-            let first = k - b.columns.len();
-            // The block's contribution's size on either half (RMS of its columns × coefficients).
-            let size = |beta: &[f64]| -> f64 {
-                (0..n)
-                    .map(|r| {
-                        (first..k)
-                            .map(|i| beta[i] * lib_col(&lib, &trial, i)[r])
-                            .sum::<f64>()
-                            .powi(2)
-                    })
-                    .sum::<f64>()
-                    .sqrt()
-            };
-            let (sa, sc) = (size(&a), size(&c));
-            let same_sign = (first..k).all(|i| {
-                a[i] * c[i] >= 0.0 || (a[i].abs() < 0.1 * sa.max(1e-300) && b.columns.len() > 1)
-            });
-            if !same_sign || sa.min(sc) < 0.33 * sa.max(sc) {
-                break;
+                None => break,
             }
         }
-        chosen.push(bi);
-        rss = new_rss;
-        let cols: Vec<&[f64]> = (chosen.iter())
-            .flat_map(|&c| lib[c].columns.iter().map(Vec::as_slice))
-            .collect();
-        if let Some((beta, _, _)) = wls(&cols, &y, &w) {
-            for r in 0..n {
-                let fit: f64 = (0..beta.len()).map(|i| beta[i] * cols[i][r]).sum();
-                residual[r] = y[r] - fit;
+        (chosen, rss)
+    };
+    // The symbolic search's best formulas against `residual`, made orthogonal to the
+    // blocks `chosen` and the nuisance, added to the library: their indices.
+    let mut symbolic_blocks = |lib: &mut Vec<Block>, chosen: &[usize], residual: &[f64]| {
+        let mut against: Vec<&[f64]> = nuisance.iter().map(Vec::as_slice).collect();
+        against.extend((chosen.iter()).flat_map(|&c| lib[c].columns.iter().map(Vec::as_slice)));
+        let (found, searched) = symbolic::search(m, &idx, residual, &w, &against);
+        let first = lib.len();
+        let refs: Vec<&[f64]> = nuisance.iter().map(Vec::as_slice).collect();
+        for (t, col) in found {
+            let mut b = Block {
+                family: Family::Symbolic,
+                member: String::new(),
+                scanned: searched,
+                terms: vec![t],
+                columns: vec![col],
+            };
+            if !linear {
+                raw.push(b.columns.clone());
+            }
+            if !refs.is_empty() {
+                for col in &mut b.columns {
+                    orthogonalise(&refs, col, &w);
+                }
+            }
+            lib.push(b);
+        }
+        first..lib.len()
+    };
+    let (mut chosen, mut rss) = greedy(&lib, Vec::new(), total);
+    // Whether the typed law leaves what the estimate's own noise would: its weighted mean
+    // square within the band's, plus three standard errors of a mean square of that many
+    // effective samples.
+    let within_band = {
+        let n_e = effective(&left_by(&lib, &chosen, &y, &w)).max(2.0);
+        rss / wsum <= median * median * (1.0 + 3.0 * (2.0 / n_e).sqrt())
+    };
+    // Several typed terms for one place may be mimicking a shape the library lacks.
+    let mimicking = chosen.len() >= symbolic::MIMICRY_TERMS;
+    // When the typed library leaves more than the band, a symbolic search offers the
+    // formula that explains most of what is left; it joins the law by the same rules (its
+    // whole search counted as its scan), at most once.
+    if !within_band {
+        let residual = left_by(&lib, &chosen, &y, &w);
+        let offered = symbolic_blocks(&mut lib, &chosen, &residual);
+        if let Some((bi, r)) = next_block(&lib, &chosen, offered, &y, &w, rss, &residual) {
+            chosen.push(bi);
+            rss = r;
+        }
+    }
+    // A law that starts from a formula may say with one term what the typed library says
+    // with several (an eddy-current brake's peak, mimicked by a wide sign, a negative drag
+    // and a cubic), or explain what it leaves: the two compete by the information
+    // criterion, the formula's whole search counted as its scan. A typed law that loses is
+    // offered too, and a formula that loses when it is within that scan's cost and one
+    // parameter and leaves no more than the typed law (the screen's criterion then cannot
+    // tell them apart, a simulation can; a formula that explains less, `atan ω` beside
+    // Coulomb friction and a brush drop, only reshuffled what the pairs were made of). Where the typed law leaves only the band with
+    // few terms there is no contest: a formula would only bend a named law's shape (a
+    // Stribeck excess, found on what Coulomb friction leaves, was pre-empted by `atan`).
+    let mut runner_up: Option<Vec<usize>> = None;
+    if !within_band || mimicking {
+        let offered = symbolic_blocks(&mut lib, &[], &y);
+        if let Some((bi, r)) = next_block(&lib, &[], offered, &y, &w, total, &y) {
+            let searched = lib[bi].scanned as f64;
+            let (other, other_rss) = greedy(&lib, vec![bi], r);
+            let n_e = effective(&left_by(&lib, &chosen, &y, &w))
+                .max(effective(&left_by(&lib, &other, &y, &w)));
+            let criterion = |chosen: &[usize], rss: f64| {
+                n_e * rss.max(1e-300).ln()
+                    + (chosen.iter())
+                        .map(|&c| {
+                            let b = &lib[c];
+                            let shaped = b.terms.iter().filter(|t| t.shape.is_some()).count();
+                            (b.columns.len() + shaped) as f64 * n_e.max(2.0).ln()
+                                + 2.0 * (b.scanned as f64).ln()
+                        })
+                        .sum::<f64>()
+            };
+            let (typed_c, other_c) = (criterion(&chosen, rss), criterion(&other, other_rss));
+            let margin = 2.0 * searched.ln() + n_e.max(2.0).ln();
+            if chosen.is_empty() || other_c < typed_c {
+                // The typed law stays on offer: a formula of two signals can follow the
+                // screen's estimate better than the simulation (a drive's position stands in
+                // for its direction of travel).
+                runner_up = Some(std::mem::replace(&mut chosen, other)).filter(|c| !c.is_empty());
+            } else if other_c < typed_c + margin && other_rss <= rss {
+                runner_up = Some(other);
             }
         }
     }
-    if chosen.is_empty() {
+    let built = Built {
+        m,
+        idx: &idx,
+        lib: &lib,
+        raw: &raw,
+        y: &y,
+        w: &w,
+        total,
+    };
+    let out: Vec<Law> = std::iter::once(chosen)
+        .chain(runner_up)
+        .filter_map(|chosen| built.law(&chosen))
+        .collect();
+    out
+}
+
+/// What a law is made from: the place, the screen's samples, the library's
+/// blocks (and their columns as built, when those regressed on were made
+/// orthogonal to a nuisance), the estimate, the weights and its weighted
+/// sum of squares.
+struct Built<'a> {
+    m: &'a MissingSignal,
+    idx: &'a [usize],
+    lib: &'a [Block],
+    raw: &'a [Vec<Vec<f64>>],
+    y: &'a [f64],
+    w: &'a [f64],
+    total: f64,
+}
+
+impl Built<'_> {
+    /// The law of the blocks `chosen`: coefficients, their standard errors
+    /// (effective samples counted), unique names, the share explained.
+    fn law(&self, chosen: &[usize]) -> Option<Law> {
+        let Built {
+            m,
+            idx,
+            lib,
+            raw,
+            y,
+            w,
+            total,
+        } = *self;
+        if chosen.is_empty() {
+            return None;
+        }
+        let n = idx.len();
+        let residual = left_by(lib, chosen, y, w);
+        let cols = design(lib, chosen);
+        let (beta, var, rss) = wls(&cols, y, w)?;
+        // The law's own values: its terms as built (not made orthogonal to the nuisance).
+        let built: Vec<&[f64]> = if raw.is_empty() {
+            cols.clone()
+        } else {
+            (chosen.iter())
+                .flat_map(|&c| raw[c].iter().map(Vec::as_slice))
+                .collect()
+        };
+        let fitted: Vec<(usize, f64)> = (0..n)
+            .map(|r| (idx[r], (0..beta.len()).map(|i| beta[i] * built[i][r]).sum()))
+            .collect();
+        let n_eff = effective(&residual).min(n as f64);
+        let dof = (n_eff - beta.len() as f64).max(1.0);
+        let wsum: f64 = w.iter().sum::<f64>().max(1e-300);
+        // σ² per unit weight, counted in effective samples.
+        let s2 = rss / wsum * (n as f64) / dof;
+        let mut terms: Vec<LawTerm> = Vec::new();
+        let mut i = 0;
+        for &c in chosen {
+            let columns = if raw.is_empty() {
+                &lib[c].columns
+            } else {
+                &raw[c]
+            };
+            for (t, col) in lib[c].terms.iter().zip(columns) {
+                let mut t = t.clone();
+                t.coefficient = beta[i];
+                t.std_error = (var[i] * s2).sqrt();
+                t.term_max = col.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+                terms.push(t);
+                i += 1;
+            }
+        }
+        // Parameter names unique within the law.
+        let mut seen: Vec<String> = Vec::new();
+        for t in &mut terms {
+            let mut name = t.param.clone();
+            let mut k = 2;
+            while seen.contains(&name) {
+                name = format!("{}_{k}", t.param);
+                k += 1;
+            }
+            t.param = name.clone();
+            if let Some(sh) = t.shape.as_mut() {
+                // `eps_sign`, `vs_stribeck_2`, `t_step`: the shape's stem and the term's name.
+                sh.name = format!("{}{}", sh.name, name.trim_start_matches('c'));
+            }
+            seen.push(name);
+        }
+        Some(Law {
+            location: m.location.clone(),
+            place: m.place.clone(),
+            quantity: m.quantity,
+            unit: m.unit.clone(),
+            terms,
+            explained: (1.0 - rss / total).clamp(0.0, 1.0),
+            residual_rms: (rss / wsum).sqrt(),
+            missing_max: y.iter().fold(0.0_f64, |a, v| a.max(v.abs())),
+            effective_samples: n_eff,
+            fitted,
+        })
+    }
+}
+
+/// The columns of the blocks `chosen`, in order.
+fn design<'a>(lib: &'a [Block], chosen: &[usize]) -> Vec<&'a [f64]> {
+    (chosen.iter())
+        .flat_map(|&c| lib[c].columns.iter().map(Vec::as_slice))
+        .collect()
+}
+
+/// What the law made of the blocks `chosen` leaves of `y` (its weighted least squares).
+fn left_by(lib: &[Block], chosen: &[usize], y: &[f64], w: &[f64]) -> Vec<f64> {
+    let cols = design(lib, chosen);
+    match wls(&cols, y, w) {
+        Some((beta, _, _)) => (0..y.len())
+            .map(|r| y[r] - (0..beta.len()).map(|i| beta[i] * cols[i][r]).sum::<f64>())
+            .collect(),
+        None => y.to_vec(),
+    }
+}
+
+/// One step of the forward selection: of the blocks `offered` whose family the law does
+/// not have yet, the one that lowers the weighted residual sum of squares (`rss`, leaving
+/// `residual`) most, with that sum — if it earns its place: its gain beats the
+/// information criterion counted in effective samples plus its scan's size, it removes a
+/// tenth of what is left (a product or a formula a third), and its share agrees in sign
+/// and size on both halves of the recording (a law, not an episode).
+fn next_block(
+    lib: &[Block],
+    chosen: &[usize],
+    offered: std::ops::Range<usize>,
+    y: &[f64],
+    w: &[f64],
+    rss: f64,
+    residual: &[f64],
+) -> Option<(usize, f64)> {
+    let n = y.len();
+    let half = n / 2;
+    let taken = |b: &Block| {
+        chosen.iter().any(|&c| {
+            let o = &lib[c];
+            o.family == b.family && (b.family != Family::Harmonic || o.member == b.member)
+        })
+    };
+    let mut best: Option<(usize, f64)> = None;
+    for bi in offered {
+        if taken(&lib[bi]) {
+            continue;
+        }
+        let mut trial = chosen.to_vec();
+        trial.push(bi);
+        if let Some((_, _, r)) = wls(&design(lib, &trial), y, w)
+            && best.is_none_or(|(_, br)| r < br)
+        {
+            best = Some((bi, r));
+        }
+    }
+    let (bi, new_rss) = best?;
+    let b = &lib[bi];
+    let mut trial = chosen.to_vec();
+    trial.push(bi);
+    // The independent samples are those of what the law would leave (the estimate's own
+    // noise), not of what it explains: a missing flow that is a clean step is as smooth
+    // as a signal gets, and counted on itself it would be worth two samples.
+    let n_eff = effective(&left_by(lib, &trial, y, w)).max(effective(residual));
+    // A shape the scan chose (a width, a Stribeck speed, a step's time) is a parameter
+    // the confirming fit frees: it counts as one.
+    let shaped = b.terms.iter().filter(|t| t.shape.is_some()).count();
+    let k_new = (b.columns.len() + shaped) as f64;
+    let gain = n_eff * (rss / new_rss.max(1e-300)).ln();
+    let cost = k_new * n_eff.max(2.0).ln() + 2.0 * (b.scanned as f64).ln();
+    // Significant and worth a term: it removes a tenth of what is left at least (a
+    // product a third: two signals multiplied mimic much — on Silverbox `v²·q` took a
+    // share of the cubic spring's and of an input filter's error beside it).
+    let share = if matches!(b.family, Family::Product | Family::Symbolic) {
+        PRODUCT_MIN_SHARE
+    } else {
+        MIN_SHARE
+    };
+    if gain.is_nan() || gain <= cost || new_rss > (1.0 - share) * rss {
         return None;
     }
-    let cols: Vec<&[f64]> = (chosen.iter())
-        .flat_map(|&c| lib[c].columns.iter().map(Vec::as_slice))
-        .collect();
-    let (beta, var, rss) = wls(&cols, &y, &w)?;
-    // The law's own values: its terms as built (not made orthogonal to the nuisance).
-    let built: Vec<&[f64]> = if raw.is_empty() {
-        cols.clone()
-    } else {
-        (chosen.iter())
-            .flat_map(|&c| raw[c].iter().map(Vec::as_slice))
-            .collect()
-    };
-    let fitted: Vec<(usize, f64)> = (0..n)
-        .map(|r| (idx[r], (0..beta.len()).map(|i| beta[i] * built[i][r]).sum()))
-        .collect();
-    let n_eff = effective(&residual).min(n as f64);
-    let dof = (n_eff - beta.len() as f64).max(1.0);
-    let wsum: f64 = w.iter().sum::<f64>().max(1e-300);
-    // σ² per unit weight, counted in effective samples.
-    let s2 = rss / wsum * (n as f64) / dof;
-    let mut terms: Vec<LawTerm> = Vec::new();
-    let mut i = 0;
-    for &c in &chosen {
-        let columns = if raw.is_empty() {
-            &lib[c].columns
-        } else {
-            &raw[c]
+    // A law holds on both halves: the new block's share agrees in sign and size.
+    if !matches!(b.family, Family::Step | Family::Ramp) {
+        let agree = [0..half, half..n].map(|range| {
+            let cols: Vec<Vec<f64>> = (trial.iter())
+                .flat_map(|&c| lib[c].columns.iter().map(|col| col[range.clone()].to_vec()))
+                .collect();
+            let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+            wls(&refs, &y[range.clone()], &w[range.clone()])
+        });
+        let [Some((a, _, _)), Some((c, _, _))] = agree else {
+            return None;
         };
-        for (t, col) in lib[c].terms.iter().zip(columns) {
-            let mut t = t.clone();
-            t.coefficient = beta[i];
-            t.std_error = (var[i] * s2).sqrt();
-            t.term_max = col.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
-            terms.push(t);
-            i += 1;
+        let k = a.len();
+        let first = k - b.columns.len();
+        // The block's contribution's size on either half (RMS of its columns × coefficients).
+        let size = |beta: &[f64]| -> f64 {
+            (0..n)
+                .map(|r| {
+                    (first..k)
+                        .map(|i| beta[i] * lib_col(lib, &trial, i)[r])
+                        .sum::<f64>()
+                        .powi(2)
+                })
+                .sum::<f64>()
+                .sqrt()
+        };
+        let (sa, sc) = (size(&a), size(&c));
+        let same_sign = (first..k).all(|i| {
+            a[i] * c[i] >= 0.0 || (a[i].abs() < 0.1 * sa.max(1e-300) && b.columns.len() > 1)
+        });
+        if !same_sign || sa.min(sc) < 0.33 * sa.max(sc) {
+            return None;
         }
     }
-    // Parameter names unique within the law.
-    let mut seen: Vec<String> = Vec::new();
-    for t in &mut terms {
-        let mut name = t.param.clone();
-        let mut k = 2;
-        while seen.contains(&name) {
-            name = format!("{}_{k}", t.param);
-            k += 1;
-        }
-        t.param = name.clone();
-        if let Some(sh) = t.shape.as_mut() {
-            // `eps_sign`, `vs_stribeck_2`, `t_step`: the shape's stem and the term's name.
-            sh.name = format!("{}{}", sh.name, name.trim_start_matches('c'));
-        }
-        seen.push(name);
-    }
-    Some(Law {
-        location: m.location.clone(),
-        place: m.place.clone(),
-        quantity: m.quantity,
-        unit: m.unit.clone(),
-        terms,
-        explained: (1.0 - rss / total).clamp(0.0, 1.0),
-        residual_rms: (rss / wsum).sqrt(),
-        missing_max: y.iter().fold(0.0_f64, |a, v| a.max(v.abs())),
-        effective_samples: n_eff,
-        fitted,
-    })
+    Some((bi, new_rss))
 }
 
 /// `v` minus its weighted least-squares fit on `cols`: the part of `v`

@@ -361,6 +361,17 @@ impl Solver<'_> {
         };
 
         let (std_errors, correlation) = self.uncertainty(termination);
+        let (robust_std_errors, robust_lags) = if std_errors.iter().any(|s| s.is_finite()) {
+            super::report::robust_uncertainty(
+                &self.jac,
+                &self.r,
+                &std_errors,
+                self.scales,
+                self.problem.series_length(),
+            )
+        } else {
+            (vec![f64::INFINITY; self.n], 0)
+        };
         // `uncertainty` leaves a Jacobian at the final point unless cancelled.
         let termination = if termination == Termination::Converged && self.jac_incomplete {
             Termination::Stalled
@@ -376,6 +387,8 @@ impl Solver<'_> {
             evaluations: self.evaluations,
             termination,
             correlation,
+            robust_std_errors,
+            robust_lags,
         }
     }
 

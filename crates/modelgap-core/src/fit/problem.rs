@@ -21,6 +21,15 @@ pub trait ResidualProblem: Sync {
     /// Whatever stops the evaluation (a model that cannot simulate these parameters). At
     /// the start point the error ends the fit; at a trial point it only rejects the step.
     fn residuals(&self, params: &[f64], out: &mut [f64]) -> crate::Result<()>;
+
+    /// The residuals are time series of this many samples, one after the other (one per
+    /// output), and any rows after the last whole series are independent (priors): the
+    /// robust standard errors ([`crate::fit::FitReport::robust_std_errors`]) sum the
+    /// score's correlation over time within this layout. `None` (the default): all rows
+    /// are one series in time order.
+    fn series_length(&self) -> Option<usize> {
+        None
+    }
 }
 
 /// A shared flag that stops long loops (Ctrl-C, a Python KeyboardInterrupt).
