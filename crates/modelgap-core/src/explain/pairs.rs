@@ -74,7 +74,16 @@ pub(super) fn second_effect(
     base_weighted: &[f64],
 ) -> Second {
     let first = best.effect();
-    let first_c = prepared(&first.candidate, target.rec);
+    // The first with the model's free parameters, as it was confirmed: the pair re-fits the
+    // calibration too (held at the calibrated values, a mass "changing" 3 ms into
+    // Silverbox's record re-calibrated the mass beside the cubic spring).
+    let (first_c, first_values) = match &best.calibration {
+        Some(cal) => (
+            target.joint(&prepared(&first.candidate, target.rec)),
+            first.values.iter().chain(&cal.values).copied().collect(),
+        ),
+        None => (prepared(&first.candidate, target.rec), first.values.clone()),
+    };
     let reference_cost = 0.5 * reference.iter().map(|r| r * r).sum::<f64>();
     // The best few of the screen on top of the first, fitted jointly with it.
     screened.truncate(PAIR_CONFIRM);
@@ -83,7 +92,7 @@ pub(super) fn second_effect(
         .map(|(_, c, start)| {
             // The pair is fitted jointly from the first's values and the second's screen.
             let second = screened_fit(&c, start);
-            let start: Vec<f64> = first.values.iter().chain(&second.values).copied().collect();
+            let start: Vec<f64> = first_values.iter().chain(&second.values).copied().collect();
             match fit_pair(target, &first_c, &second.candidate, &start, opts) {
                 Ok((report, weighted)) => {
                     let (a, b) = report.params.split_at(first_c.params.len());
@@ -177,7 +186,7 @@ pub(super) fn second_effect(
     // better than the first alone (unless the second effect is itself an event at one time,
     // which a fit on the half before it cannot see).
     if !heldout::is_event(&second.candidate, &second.values, target.rec) {
-        let single = [(&first_c, first.values.as_slice())];
+        let single = [(&first_c, first_values.as_slice())];
         let pair = [
             (&first_c, joint_first.values.as_slice()),
             (&second.candidate, second.values.as_slice()),
