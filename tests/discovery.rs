@@ -479,6 +479,18 @@ fn an_eddy_current_brake_no_typed_term_can_say_is_found_by_the_symbolic_search()
         "symbolic"
     );
     at_floor(&ex, 1.3);
+    // The report's plot of the missing effort says the formula is the symbolic search's.
+    let model = motor_model(12.0);
+    let before = modelgap::compare(&model, &rec, &modelgap::CompareOptions::default()).unwrap();
+    let report = modelgap::story::build_report(&before, Some(&ex), None);
+    let (caption, svg) = &report.extra_svgs[0];
+    assert!(
+        caption.contains("a formula of the symbolic search, no named law"),
+        "{caption}"
+    );
+    if let Ok(dir) = std::env::var("MODELGAP_SHOW") {
+        std::fs::write(format!("{dir}/missing-symbolic.svg"), svg).unwrap();
+    }
 }
 
 #[test]

@@ -703,8 +703,13 @@ fn draw_missing(root: &Area<'_>, m: &MissingSignal, law: Option<&Law>) -> DrawRe
         (Swatch::Fill(BAND, 1.0), "±1σ band".to_owned()),
         (Swatch::Line(BEFORE, 2), format!("{quantity} (estimated)")),
     ];
-    if law.is_some() {
-        legend.push((Swatch::Line(AFTER, 2), "law found".to_owned()));
+    if let Some(l) = law {
+        let what = if l.has_formula() {
+            "law found (with a formula of the symbolic search)"
+        } else {
+            "law found"
+        };
+        legend.push((Swatch::Line(AFTER, 2), what.to_owned()));
     }
     draw_header(&top, &format!("{quantity} at {}", m.place), &legend)?;
     // Over time.
