@@ -244,7 +244,7 @@ pub(super) fn laws_on_top(target: &Target, best: &RankedCandidate) -> Vec<Candid
     missing
         .par_iter()
         .filter(|m| m.explained >= 0.5 * most && m.explained > 0.05)
-        .filter_map(|m| screen::screen_with(m, linear))
+        .flat_map(|m| screen::screen_laws(m, linear))
         .filter_map(|l| target.model.law_candidate(&l))
         .collect()
 }
