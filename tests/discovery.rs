@@ -4,26 +4,14 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // in tests, a panic is a failure
 
+mod common;
+use common::Noise;
+
 use modelgap::Signal;
 use modelgap::bond::expr::parse;
 use modelgap::bond::simulate::{Drive, Hold, Inputs, SimOptions, simulate};
 use modelgap::bond::{BondModel, Element, ElementKind, library};
 use modelgap::{ExplainOptions, Explanation, Recording, explain};
-
-/// A small deterministic Gaussian generator (Box–Muller on a xorshift).
-struct Noise(u64);
-impl Noise {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn gauss(&mut self) -> f64 {
-        let (a, b) = (self.uniform(), self.uniform());
-        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
-    }
-}
 
 /// The DC motor with a hidden resistive law on its shaft, driven by a
 /// multisine that reverses the shaft many times, 4 s at 1 kHz, with white

@@ -12,6 +12,9 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // in tests, a panic is a failure
 
+mod common;
+use common::{Noise, summary};
+
 use std::path::Path;
 
 use modelgap::bond::simulate::Hold;
@@ -19,21 +22,6 @@ use modelgap::bond::simulate::Hold;
 use modelgap::{
     ExplainOptions, Explanation, LoadOptions, Model, Recording, Signal, explain, load_model,
 };
-
-/// A small deterministic Gaussian generator (Box–Muller on a xorshift).
-struct Noise(u64);
-impl Noise {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn gauss(&mut self) -> f64 {
-        let (a, b) = (self.uniform(), self.uniform());
-        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
-    }
-}
 
 const M: f64 = 5.0;
 const C: f64 = 200.0;
@@ -132,26 +120,6 @@ fn cases() -> Vec<(&'static str, Option<Law>)> {
             Some(|v, _, _| if v > 0.0 { 60.0 * v } else { 120.0 * v }),
         ),
     ]
-}
-
-fn summary(name: &str, ex: &Explanation) -> String {
-    let chosen: Vec<String> = (ex.chosen.iter())
-        .map(|c| {
-            let ps: Vec<String> = (c.params.iter())
-                .map(|p| format!("{}={:.4e}", p.name, p.value))
-                .collect();
-            format!("{} [{}]", c.candidate.id, ps.join(" "))
-        })
-        .collect();
-    let floors: Vec<String> = (ex.outputs.iter())
-        .map(|o| format!("{} {:.2}x", o.name, o.rms_after / o.noise_floor))
-        .collect();
-    format!(
-        "{name:<22} {:<14} {} | {}",
-        format!("{:?}", ex.verdict),
-        floors.join(" "),
-        chosen.join(" + ")
-    )
 }
 
 fn params(ex: &Explanation) -> (Vec<(String, f64)>, String) {

@@ -10,24 +10,12 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // in tests, a panic is a failure
 
+mod common;
+use common::{Noise, chosen, summary, value};
+
 use modelgap::bond::simulate::Hold;
 use modelgap::bond::{BondModel, library};
 use modelgap::{ExplainOptions, Explanation, Recording, Signal, Verdict, explain};
-
-/// A small deterministic Gaussian generator (Box–Muller on a xorshift).
-struct Noise(u64);
-impl Noise {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn gauss(&mut self) -> f64 {
-        let (a, b) = (self.uniform(), self.uniform());
-        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
-    }
-}
 
 /// What the hidden motor has beyond the nominal one.
 #[derive(Clone, Copy, Debug, Default)]
@@ -226,35 +214,6 @@ fn explained(rec: &Recording) -> Explanation {
     explain(&motor_model(), rec, &ExplainOptions::default()).unwrap()
 }
 
-fn summary(name: &str, ex: &Explanation) -> String {
-    let chosen: Vec<String> = ex
-        .chosen
-        .iter()
-        .map(|c| {
-            let ps: Vec<String> = c
-                .params
-                .iter()
-                .map(|p| format!("{}={:.4e}", p.name, p.value))
-                .collect();
-            format!("{} [{}]", c.candidate.id, ps.join(" "))
-        })
-        .collect();
-    let floors: Vec<String> = ex
-        .outputs
-        .iter()
-        .map(|o| format!("{} {:.2}x", o.name, o.rms_after / o.noise_floor))
-        .collect();
-    format!(
-        "{name:<22} {:<14} {} | {}",
-        format!("{:?}", ex.verdict)
-            .chars()
-            .take(14)
-            .collect::<String>(),
-        floors.join(" "),
-        chosen.join(" + ")
-    )
-}
-
 fn cases() -> Vec<(&'static str, Hidden)> {
     vec![
         ("control", Hidden::default()),
@@ -399,21 +358,6 @@ fn case(name: &str) -> Hidden {
         .find(|(n, _)| *n == name)
         .map(|(_, h)| h)
         .unwrap()
-}
-
-/// The chosen effects' parameters by name, and the text for messages.
-fn chosen(ex: &Explanation) -> (Vec<String>, Vec<(String, f64)>, String) {
-    let ids = ex.chosen.iter().map(|c| c.candidate.id.clone()).collect();
-    let params = (ex.chosen.iter())
-        .flat_map(|c| c.params.iter().map(|p| (p.name.clone(), p.value)))
-        .collect();
-    (ids, params, modelgap::story::explanation_text(ex, 6))
-}
-
-fn value(params: &[(String, f64)], name: &str, text: &str) -> f64 {
-    (params.iter().find(|(n, _)| n == name))
-        .unwrap_or_else(|| panic!("no {name}:\n{text}"))
-        .1
 }
 
 fn within(value: f64, truth: f64, tolerance: f64, text: &str) {

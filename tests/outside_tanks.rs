@@ -12,24 +12,12 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // in tests, a panic is a failure
 
+mod common;
+use common::{Noise, chosen, summary, value};
+
 use modelgap::bond::BondModel;
 use modelgap::bond::file::read_model;
 use modelgap::{ExplainOptions, Explanation, Recording, Signal, explain};
-
-/// A small deterministic Gaussian generator (Box–Muller on a xorshift).
-struct Noise(u64);
-impl Noise {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn gauss(&mut self) -> f64 {
-        let (a, b) = (self.uniform(), self.uniform());
-        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
-    }
-}
 
 const TANKS: &str = r#"name = "two-tanks"
 [parameters]
@@ -235,40 +223,6 @@ fn cases() -> Vec<(&'static str, Hidden)> {
         (n, h)
     })
     .collect()
-}
-
-fn summary(name: &str, ex: &Explanation) -> String {
-    let chosen: Vec<String> = (ex.chosen.iter())
-        .map(|c| {
-            let ps: Vec<String> = (c.params.iter())
-                .map(|p| format!("{}={:.4e}", p.name, p.value))
-                .collect();
-            format!("{} [{}]", c.candidate.id, ps.join(" "))
-        })
-        .collect();
-    let floors: Vec<String> = (ex.outputs.iter())
-        .map(|o| format!("{} {:.2}x", o.name, o.rms_after / o.noise_floor))
-        .collect();
-    format!(
-        "{name:<30} {:<14} {} | {}",
-        format!("{:?}", ex.verdict),
-        floors.join(" "),
-        chosen.join(" + ")
-    )
-}
-
-fn chosen(ex: &Explanation) -> (Vec<String>, Vec<(String, f64)>, String) {
-    let ids = ex.chosen.iter().map(|c| c.candidate.id.clone()).collect();
-    let params = (ex.chosen.iter())
-        .flat_map(|c| c.params.iter().map(|p| (p.name.clone(), p.value)))
-        .collect();
-    (ids, params, modelgap::story::explanation_text(ex, 6))
-}
-
-fn value(params: &[(String, f64)], name: &str, text: &str) -> f64 {
-    (params.iter().find(|(n, _)| n == name))
-        .unwrap_or_else(|| panic!("no {name}:\n{text}"))
-        .1
 }
 
 fn case(name: &str) -> Hidden {

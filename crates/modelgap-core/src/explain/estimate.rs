@@ -58,6 +58,17 @@ pub enum SignalRole {
     Input,
 }
 
+impl SignalRole {
+    /// A flow, position, displacement or effort: a signal a law reads by its
+    /// value (not an angle, read by its harmonics, nor an input).
+    pub fn is_plain(self) -> bool {
+        matches!(
+            self,
+            SignalRole::Flow | SignalRole::Position | SignalRole::Displacement | SignalRole::Effort
+        )
+    }
+}
+
 /// A signal acting where an effort or flow is missing, as estimated.
 #[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct ActingSignal {

@@ -798,15 +798,7 @@ fn products(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
         s.is_finite() && s > 0.0
     };
     let plain: Vec<&ActingSignal> = (m.acting.iter())
-        .filter(|a| {
-            matches!(
-                a.role,
-                SignalRole::Flow
-                    | SignalRole::Position
-                    | SignalRole::Displacement
-                    | SignalRole::Effort
-            )
-        })
+        .filter(|a| a.role.is_plain())
         .filter(varying)
         .collect();
     let angles: Vec<&ActingSignal> = (m.acting.iter())

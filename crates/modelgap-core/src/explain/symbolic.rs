@@ -127,13 +127,7 @@ impl Shape {
 
 /// `sign` as the law syntax has it (`sign(0) = 0`).
 fn sign(x: f64) -> f64 {
-    if x > 0.0 {
-        1.0
-    } else if x < 0.0 {
-        -1.0
-    } else {
-        0.0
-    }
+    if x == 0.0 { 0.0 } else { x.signum() }
 }
 
 /// One factor of a formula: a shape of one signal at one scale.
@@ -194,15 +188,7 @@ pub(super) fn search(
         return (Vec::new(), 0);
     }
     let signals: Vec<(&ActingSignal, Vec<f64>, f64)> = (m.acting.iter())
-        .filter(|a| {
-            matches!(
-                a.role,
-                SignalRole::Flow
-                    | SignalRole::Position
-                    | SignalRole::Displacement
-                    | SignalRole::Effort
-            )
-        })
+        .filter(|a| a.role.is_plain())
         .filter_map(|a| {
             let v: Vec<f64> = idx
                 .iter()

@@ -1,0 +1,63 @@
+//! What the hidden-effect test files share: a deterministic Gaussian noise
+//! generator, and the one-line summary of an explanation the batteries print.
+
+#![allow(dead_code)] // each test file uses its part
+
+use modelgap::Explanation;
+
+/// A small deterministic Gaussian generator (Box–Muller on a xorshift).
+pub struct Noise(pub u64);
+
+impl Noise {
+    /// Uniform in (0, 1).
+    pub fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+
+    /// Standard normal.
+    pub fn gauss(&mut self) -> f64 {
+        let (a, b) = (self.uniform(), self.uniform());
+        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+    }
+}
+
+/// A battery's row: the case, the verdict, each output's error after as a
+/// multiple of its floor, and the chosen effects with their values.
+pub fn summary(name: &str, ex: &Explanation) -> String {
+    let chosen: Vec<String> = (ex.chosen.iter())
+        .map(|c| {
+            let ps: Vec<String> = (c.params.iter())
+                .map(|p| format!("{}={:.4e}", p.name, p.value))
+                .collect();
+            format!("{} [{}]", c.candidate.id, ps.join(" "))
+        })
+        .collect();
+    let floors: Vec<String> = (ex.outputs.iter())
+        .map(|o| format!("{} {:.2}x", o.name, o.rms_after / o.noise_floor))
+        .collect();
+    let verdict: String = format!("{:?}", ex.verdict).chars().take(14).collect();
+    format!(
+        "{name:<32} {verdict:<14} {} | {}",
+        floors.join(" "),
+        chosen.join(" + ")
+    )
+}
+
+/// The chosen effects' ids, their parameters by name, and the explanation's text.
+pub fn chosen(ex: &Explanation) -> (Vec<String>, Vec<(String, f64)>, String) {
+    let ids = ex.chosen.iter().map(|c| c.candidate.id.clone()).collect();
+    let params = (ex.chosen.iter())
+        .flat_map(|c| c.params.iter().map(|p| (p.name.clone(), p.value)))
+        .collect();
+    (ids, params, modelgap::story::explanation_text(ex, 6))
+}
+
+/// A parameter's value by name (the test fails, showing `text`, when there is none).
+pub fn value(params: &[(String, f64)], name: &str, text: &str) -> f64 {
+    (params.iter().find(|(n, _)| n == name))
+        .unwrap_or_else(|| panic!("no {name}:\n{text}"))
+        .1
+}
