@@ -13,7 +13,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // in tests, a panic is a failure
 
 mod common;
-use common::{Noise, summary};
+use common::{Noise, print_row};
 
 use std::path::Path;
 
@@ -193,16 +193,7 @@ fn battery() {
         println!("noise: white {white}, AR(0.9) {coloured} of range");
         for (name, law) in cases() {
             let rec = record(law, white, coloured, 7);
-            let t0 = std::time::Instant::now();
-            let ex = explained(&rec);
-            println!(
-                "{}  ({:.1} s)",
-                summary(name, &ex),
-                t0.elapsed().as_secs_f64()
-            );
-            if std::env::var("PROBE").is_ok_and(|p| name.contains(&p)) {
-                println!("{}", modelgap::story::explanation_text(&ex, 8));
-            }
+            print_row(name, || explained(&rec));
         }
     }
 }

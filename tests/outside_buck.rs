@@ -15,7 +15,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // in tests, a panic is a failure
 
 mod common;
-use common::{Noise, chosen, summary, value};
+use common::{Noise, chosen, print_row, value};
 
 use modelgap::bond::BondModel;
 use modelgap::bond::file::read_model;
@@ -317,16 +317,7 @@ fn battery() {
         println!("noise: white {white}, AR(0.9) {coloured} of range");
         for (name, h) in cases() {
             let rec = record(&h, white, coloured, 7);
-            let t0 = std::time::Instant::now();
-            let ex = explained(&rec);
-            println!(
-                "{}  ({:.1} s)",
-                summary(name, &ex),
-                t0.elapsed().as_secs_f64()
-            );
-            if std::env::var("PROBE").is_ok_and(|p| name.contains(&p)) {
-                println!("{}", modelgap::story::explanation_text(&ex, 8));
-            }
+            print_row(name, || explained(&rec));
         }
     }
 }

@@ -61,3 +61,18 @@ pub fn value(params: &[(String, f64)], name: &str, text: &str) -> f64 {
         .unwrap_or_else(|| panic!("no {name}:\n{text}"))
         .1
 }
+
+/// Explains one case of a battery and prints its row with the time it took
+/// (and the whole text when the `PROBE` environment variable names the case).
+pub fn print_row(name: &str, explain: impl FnOnce() -> Explanation) {
+    let t0 = std::time::Instant::now();
+    let ex = explain();
+    println!(
+        "{}  ({:.1} s)",
+        summary(name, &ex),
+        t0.elapsed().as_secs_f64()
+    );
+    if std::env::var("PROBE").is_ok_and(|p| name.contains(&p)) {
+        println!("{}", modelgap::story::explanation_text(&ex, 8));
+    }
+}
