@@ -15,7 +15,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // in tests, a panic is a failure
 
 mod common;
-use common::{Noise, chosen, print_row, value};
+use common::{Noise, chosen, print_row, rk4_step, value};
 
 use modelgap::bond::BondModel;
 use modelgap::bond::file::read_model;
@@ -169,31 +169,11 @@ fn record(h: &Hidden, white: f64, coloured: f64, seed: u64) -> Recording {
         });
         let step = dt / sub as f64;
         for j in 0..sub {
-            let t0 = t + j as f64 * step;
-            let add = |a: [f64; 3], b: [f64; 3], c: f64| {
-                [a[0] + c * b[0], a[1] + c * b[1], a[2] + c * b[2]]
-            };
-            let k1 = f(t0, x);
-            let k2 = f(t0 + step / 2.0, add(x, k1, step / 2.0));
-            let k3 = f(t0 + step / 2.0, add(x, k2, step / 2.0));
-            let k4 = f(t0 + step, add(x, k3, step));
-            for s in 0..3 {
-                x[s] += step / 6.0 * (k1[s] + 2.0 * k2[s] + 2.0 * k3[s] + k4[s]);
-            }
+            rk4_step(f, t + j as f64 * step, &mut x, step);
         }
     }
     let mut rng = Noise(0x9E37_79B9_7F4A_7C15 ^ seed.wrapping_mul(0x2545_F491_4F6C_DD1D));
-    let gain = (1.0_f64 - 0.81).sqrt();
-    let mut noisy = |y: Vec<f64>| -> Vec<f64> {
-        let range = y.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-        let mut ar = 0.0;
-        y.iter()
-            .map(|v| {
-                ar = 0.9 * ar + gain * rng.gauss();
-                v + white * range * rng.gauss() + coloured * range * ar
-            })
-            .collect()
-    };
+    let mut noisy = |y: Vec<f64>| rng.added(y, white, coloured);
     let (is, vs) = (noisy(is), noisy(vs));
     Recording::new(
         ts,

@@ -13,7 +13,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // in tests, a panic is a failure
 
 mod common;
-use common::{Noise, chosen, print_row, value};
+use common::{Noise, chosen, print_row, rk4_step, value};
 
 use modelgap::bond::BondModel;
 use modelgap::bond::file::read_model;
@@ -132,29 +132,11 @@ fn record(h: &Hidden, white: f64, coloured: f64, both: bool, seed: u64) -> Recor
         h2s.push(h.gauge2.1 * v[1] / A2 + h.gauge2.0);
         let step = dt / sub as f64;
         for j in 0..sub {
-            let t0 = t + j as f64 * step;
-            let add = |a: [f64; 2], b: [f64; 2], c: f64| [a[0] + c * b[0], a[1] + c * b[1]];
-            let k1 = f(t0, v);
-            let k2 = f(t0 + step / 2.0, add(v, k1, step / 2.0));
-            let k3 = f(t0 + step / 2.0, add(v, k2, step / 2.0));
-            let k4 = f(t0 + step, add(v, k3, step));
-            for i in 0..2 {
-                v[i] += step / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-            }
+            rk4_step(f, t + j as f64 * step, &mut v, step);
         }
     }
     let mut rng = Noise(0x9E37_79B9_7F4A_7C15 ^ seed.wrapping_mul(0x2545_F491_4F6C_DD1D));
-    let gain = (1.0_f64 - 0.81).sqrt();
-    let mut noisy = |y: Vec<f64>| -> Vec<f64> {
-        let range = y.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-        let mut ar = 0.0;
-        y.iter()
-            .map(|v| {
-                ar = 0.9 * ar + gain * rng.gauss();
-                v + white * range * rng.gauss() + coloured * range * ar
-            })
-            .collect()
-    };
+    let mut noisy = |y: Vec<f64>| rng.added(y, white, coloured);
     let mut signals = vec![Signal::new("Q", qs)];
     let (h1s, h2s) = (noisy(h1s), noisy(h2s));
     if both {

@@ -76,3 +76,36 @@ pub fn print_row(name: &str, explain: impl FnOnce() -> Explanation) {
         println!("{}", modelgap::story::explanation_text(&ex, 8));
     }
 }
+
+impl Noise {
+    /// `y` with white noise of `white` × its range and AR(0.9) noise of
+    /// `coloured` × its range (unit variance before scaling) added.
+    pub fn added(&mut self, y: Vec<f64>, white: f64, coloured: f64) -> Vec<f64> {
+        let gain = (1.0_f64 - 0.81).sqrt();
+        let range = y.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let mut ar = 0.0;
+        y.iter()
+            .map(|v| {
+                ar = 0.9 * ar + gain * self.gauss();
+                v + white * range * self.gauss() + coloured * range * ar
+            })
+            .collect()
+    }
+}
+
+/// One classical Runge–Kutta step of `dx/dt = f(t, x)` from `t` over `h`.
+pub fn rk4_step<const N: usize>(
+    f: impl Fn(f64, [f64; N]) -> [f64; N],
+    t: f64,
+    x: &mut [f64; N],
+    h: f64,
+) {
+    let add = |a: [f64; N], b: [f64; N], c: f64| std::array::from_fn(|i| a[i] + c * b[i]);
+    let k1 = f(t, *x);
+    let k2 = f(t + h / 2.0, add(*x, k1, h / 2.0));
+    let k3 = f(t + h / 2.0, add(*x, k2, h / 2.0));
+    let k4 = f(t + h, add(*x, k3, h));
+    for i in 0..N {
+        x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+    }
+}
