@@ -278,22 +278,29 @@ pub(super) fn robust_uncertainty(
     let lags = ((1.1447 * (alpha * t_len as f64).cbrt()).ceil() as usize)
         .min(MAX_LAGS)
         .min(t_len / 4);
-    let mut sm = DMatrix::zeros(k, k);
+    // Each lag's Γ_l summed flat (k × k, row-major), weighted into S with its transpose.
+    let mut s_flat = vec![0.0; k * k];
+    let mut gamma = vec![0.0; k * k];
     for l in 0..=lags {
+        gamma.fill(0.0);
+        for (gt, gl) in g.chunks_exact(k).skip(l).zip(g.chunks_exact(k)) {
+            for (row, &x) in gamma.chunks_exact_mut(k).zip(gt) {
+                for (cell, &y) in row.iter_mut().zip(gl) {
+                    *cell += x * y;
+                }
+            }
+        }
         let w = 1.0 - l as f64 / (lags as f64 + 1.0);
-        for t in l..t_len {
-            let (gt, gl) = (&g[t * k..(t + 1) * k], &g[(t - l) * k..(t - l + 1) * k]);
-            for a in 0..k {
-                for b in 0..k {
-                    let v = w * gt[a] * gl[b];
-                    sm[(a, b)] += v;
-                    if l > 0 {
-                        sm[(b, a)] += v;
-                    }
+        for a in 0..k {
+            for b in 0..k {
+                s_flat[a * k + b] += w * gamma[a * k + b];
+                if l > 0 {
+                    s_flat[b * k + a] += w * gamma[a * k + b];
                 }
             }
         }
     }
+    let mut sm = DMatrix::from_row_slice(k, k, &s_flat);
     for e in &extra {
         for a in 0..k {
             for b in 0..k {
