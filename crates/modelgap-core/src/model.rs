@@ -261,6 +261,15 @@ pub trait Model: Send + Sync {
         None
     }
 
+    /// Whether a prediction costs so much more than a fit's algebra (a cloth simulated
+    /// step by step through its constraint solver) that fits should update their Jacobian
+    /// by secant steps between finite-difference ones ([`crate::fit::FitOptions::secant`]):
+    /// a fit's step then costs one prediction instead of one per parameter. Fits still end
+    /// on, and take their standard errors from, finite differences. Default `false`.
+    fn costly_predictions(&self) -> bool {
+        false
+    }
+
     /// How the loop's results read for this model: text, JSON and the report. The default
     /// reads them output by output ([`crate::story::PerOutput`]).
     fn story(&self) -> &dyn crate::story::Story {

@@ -1794,6 +1794,7 @@ pub fn compare_options(opts: &ExplainOptions) -> CompareOptions {
 /// model's own precision ([`Model::fit_tolerances`]).
 fn fit_options(model: &dyn Model, opts: &ExplainOptions) -> FitOptions {
     let mut fit = opts.fit.clone();
+    fit.secant |= model.costly_predictions();
     if let Some((ftol, xtol)) = model.fit_tolerances() {
         fit.ftol = fit.ftol.max(ftol);
         fit.xtol = fit.xtol.max(xtol);
