@@ -77,6 +77,18 @@ pub(super) fn is_event(c: &Candidate, values: &[f64], rec: &Recording) -> bool {
     })
 }
 
+/// The time (s) of a candidate at `values` that changes at one time within a twentieth
+/// of the record's edge (a step or a fault at `t` that [`is_event`] does not count): there
+/// a change cannot be told from the initial state or from a constant.
+pub(super) fn edge_time(c: &Candidate, values: &[f64], rec: &Recording) -> Option<f64> {
+    if is_event(c, values, rec) {
+        return None;
+    }
+    (c.params.iter().zip(values))
+        .find(|(p, _)| p.unit == "s" && p.name.starts_with('t'))
+        .map(|(_, v)| *v)
+}
+
 /// The held-out error of the model without and with an effect: `without`
 /// and `with` are the effects built in (each with its values from a fit on
 /// the whole recording). `None` when a simulation fails.

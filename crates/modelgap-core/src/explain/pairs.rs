@@ -91,7 +91,15 @@ pub(super) fn second_effect(
         .into_par_iter()
         .map(|(_, c, start)| {
             // The pair is fitted jointly from the first's values and the second's screen.
-            let second = screened_fit(&c, start);
+            let mut second = screened_fit(&c, start);
+            // The calibration is the first's to carry: a second that carried it too would
+            // hold a copy that overrides the first's, and the first's would move nothing
+            // (on Silverbox, six dead parameters in each pair fit of fifteen).
+            if best.calibration.is_some() {
+                let own = second.candidate.params.len() - target.n_calibration(&second.candidate);
+                second.candidate.params.truncate(own);
+                second.values.truncate(own);
+            }
             let start: Vec<f64> = first_values.iter().chain(&second.values).copied().collect();
             match fit_pair(target, &first_c, &second.candidate, &start, opts) {
                 Ok((report, weighted)) => {
@@ -191,7 +199,22 @@ pub(super) fn second_effect(
             (&first_c, joint_first.values.as_slice()),
             (&second.candidate, second.values.as_slice()),
         ];
+        let edge = heldout::edge_time(&second.candidate, &second.values, target.rec);
         match heldout::held_out(target, &single, &pair) {
+            // A change at the record's edge that acts in one half only is the start's
+            // transient or a constant in disguise: the halves cannot test it, and nothing
+            // else can (Silverbox's linear stiffness "changing" 4.3 ms into the record, once
+            // the calibration was the first's alone).
+            Some(h) if !h.judged && edge.is_some() => {
+                return Second::NotHeldOut(format!(
+                    "a second effect, {} ({}), changes at {:.4} s, at the record's edge, \
+                     where a change cannot be told from the initial state or a constant, and \
+                     it acts in one half only, so the halves cannot test it: it is not added",
+                    second.candidate.id,
+                    second.candidate.name,
+                    edge.unwrap_or_default()
+                ));
+            }
             Some(h) if h.lowers() => {}
             Some(h) => {
                 return Second::NotHeldOut(format!(
