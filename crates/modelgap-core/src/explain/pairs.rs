@@ -190,6 +190,25 @@ pub(super) fn second_effect(
     if gain <= opts.significance {
         return Second::None;
     }
+    // A change at the record's edge acts in one half only, where it cannot be told from the
+    // start's state or from a constant: the halves cannot test it, and nothing else can
+    // (Silverbox's linear stiffness "changing" 4.3 ms into the record beside the cubic,
+    // once the calibration was the first's alone). A pair with one is not added.
+    let edges = [
+        (&first_c, joint_first.values.as_slice()),
+        (&second.candidate, second.values.as_slice()),
+    ];
+    if let Some((c, t)) = edges
+        .iter()
+        .find_map(|(c, v)| heldout::edge_time(c, v, target.rec).map(|t| (c, t)))
+    {
+        return Second::NotHeldOut(format!(
+            "a pair of effects, {} with {}, holds {} ({}) changing at {t:.4} s, at the \
+             record's edge, where a change cannot be told from the initial state or a \
+             constant, and the halves cannot test it: it is not added",
+            first_c.id, second.candidate.id, c.id, c.name
+        ));
+    }
     // A law holds throughout: fitted on either half, the pair must predict the other half
     // better than the first alone (unless the second effect is itself an event at one time,
     // which a fit on the half before it cannot see).
@@ -199,22 +218,7 @@ pub(super) fn second_effect(
             (&first_c, joint_first.values.as_slice()),
             (&second.candidate, second.values.as_slice()),
         ];
-        let edge = heldout::edge_time(&second.candidate, &second.values, target.rec);
         match heldout::held_out(target, &single, &pair) {
-            // A change at the record's edge that acts in one half only is the start's
-            // transient or a constant in disguise: the halves cannot test it, and nothing
-            // else can (Silverbox's linear stiffness "changing" 4.3 ms into the record, once
-            // the calibration was the first's alone).
-            Some(h) if !h.judged && edge.is_some() => {
-                return Second::NotHeldOut(format!(
-                    "a second effect, {} ({}), changes at {:.4} s, at the record's edge, \
-                     where a change cannot be told from the initial state or a constant, and \
-                     it acts in one half only, so the halves cannot test it: it is not added",
-                    second.candidate.id,
-                    second.candidate.name,
-                    edge.unwrap_or_default()
-                ));
-            }
             Some(h) if h.lowers() => {}
             Some(h) => {
                 return Second::NotHeldOut(format!(
