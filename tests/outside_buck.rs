@@ -291,6 +291,26 @@ fn a_diodes_forward_drop_is_a_sign_law_in_the_inductors_loop() {
 }
 
 #[test]
+fn a_constant_power_load_is_the_symbolic_searchs_reciprocal_with_its_power_and_dropout() {
+    // 2 W drawn as P/v above 3 V and as a resistor below: the formula `c u/max(u², 1)` of
+    // u = v/a is that law, with P = c·a and the drop-out at a.
+    let ex = explained(&record(&case("constant-power load 2 W"), 2e-3, 0.0, 45));
+    let (ids, params, text) = chosen(&ex);
+    assert_eq!(ids.len(), 1, "{text}");
+    assert!(
+        ids[0].starts_with("law@0out:") && ids[0].contains("max("),
+        "{text}"
+    );
+    let (c, a) = (
+        value(&params, "c_sym", &text),
+        value(&params, "a_sym", &text),
+    );
+    assert!((c * a / 2.0 - 1.0).abs() < 0.05, "P = {}:\n{text}", c * a);
+    assert!((a / 3.0 - 1.0).abs() < 0.05, "drop-out {a} V:\n{text}");
+    assert_eq!(ex.verdict, modelgap::Verdict::EffectFound, "{text}");
+}
+
+#[test]
 #[ignore = "about a minute in release: the battery the docs quote"]
 fn battery() {
     for (white, coloured) in [(2e-3, 0.0), (1e-3, 2e-3)] {
