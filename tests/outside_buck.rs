@@ -216,6 +216,21 @@ fn cases() -> Vec<(&'static str, Hidden)> {
             },
         ),
         (
+            "constant-power load 2 W, soft drop-out",
+            Hidden {
+                // Below 4 V this regulator's current falls as the square of the voltage:
+                // not the linear drop-out of the reciprocal factor.
+                draw: Some(|v, _| {
+                    if v >= 4.0 {
+                        2.0 / v
+                    } else {
+                        0.5 * (v / 4.0).powi(2)
+                    }
+                }),
+                ..Hidden::default()
+            },
+        ),
+        (
             "inductor saturating (atan, 2 A)",
             Hidden {
                 saturation: Some(2.0),
