@@ -455,8 +455,10 @@ class FittedParam:
 
     @property
     def std_error(self) -> float:
-        """The standard error of ``value`` (in ``unit``), scaled for the residual's effective
-        sample size; infinite when the parameter sits at a bound or the fit failed."""
+        """The standard error of ``value`` (in ``unit``): the fit's sandwich over its residual,
+        and for a chosen effect no smaller than half the difference of its fits on the
+        recording's two halves; infinite when the parameter sits at a bound or the fit
+        failed."""
 
     @property
     def at_bound(self) -> Optional[str]:

@@ -26,7 +26,7 @@ const ACTS_IN_HALF: f64 = 0.1;
 /// The held-out error of two models, each fitted on one half of the
 /// recording and measured on the other: ½Σr² of the weighted residuals on
 /// the first half, then on the second.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub(super) struct HeldOut {
     /// Without the effect (the model as it was).
     pub(super) without: [f64; 2],
@@ -35,6 +35,11 @@ pub(super) struct HeldOut {
     /// Whether every parameter of the model with the effect acts in both
     /// halves ([`ACTS_IN_HALF`]): else the folds test nothing.
     pub(super) judged: bool,
+    /// For each effect of the model with it, each parameter: half the difference
+    /// between its fits on the two halves, when both halves see it (`None` when one
+    /// does not, or it is held). Noise alone puts the two fits about 2σ apart (each
+    /// has half the data); a model that is still wrong puts them further.
+    pub(super) spread: Vec<Vec<Option<f64>>>,
 }
 
 impl HeldOut {
@@ -72,9 +77,13 @@ pub(super) fn is_event(c: &Candidate, values: &[f64], rec: &Recording) -> bool {
         return false;
     };
     let margin = 0.05 * (t1 - t0);
-    (c.params.iter().zip(values)).any(|(p, v)| {
-        p.unit == "s" && p.name.starts_with('t') && *v > t0 + margin && *v < t1 - margin
-    })
+    (c.params.iter().zip(values)).any(|(p, v)| is_time(p) && *v > t0 + margin && *v < t1 - margin)
+}
+
+/// Whether a parameter is a time in the recording (`t_fault`, a law's `t_step`), not a
+/// duration such as a lag's `tau`.
+fn is_time(p: &crate::effect::EffectParam) -> bool {
+    p.unit == "s" && (p.name == "t" || p.name.starts_with("t_"))
 }
 
 /// The time (s) of a candidate at `values` that changes at one time within a twentieth
@@ -85,7 +94,7 @@ pub(super) fn edge_time(c: &Candidate, values: &[f64], rec: &Recording) -> Optio
         return None;
     }
     (c.params.iter().zip(values))
-        .find(|(p, _)| p.unit == "s" && p.name.starts_with('t'))
+        .find(|(p, _)| is_time(p))
         .map(|(_, v)| *v)
 }
 
@@ -97,8 +106,8 @@ pub(super) fn held_out(
     without: &[(&Candidate, &[f64])],
     with: &[(&Candidate, &[f64])],
 ) -> Option<HeldOut> {
-    let (cost_without, _) = two_fold(target, without)?;
-    let (cost_with, acting) = two_fold(target, with)?;
+    let (cost_without, _, _) = two_fold(target, without)?;
+    let (cost_with, acting, spread) = two_fold(target, with)?;
     // Judged when every parameter the effect adds acts in both halves.
     let before: Vec<&str> = (without.iter())
         .flat_map(|(c, _)| c.params.iter().map(|p| p.name.as_str()))
@@ -110,11 +119,15 @@ pub(super) fn held_out(
         without: cost_without,
         with: cost_with,
         judged,
+        spread,
     })
 }
 
 /// A free parameter by name, and whether it acts in both halves.
 type Acting = (String, bool);
+
+/// Per effect, per parameter: half the difference of its two halves' fits.
+type Spread = Vec<Vec<Option<f64>>>;
 
 /// The samples in each half of the recording.
 pub(super) fn half_sizes(target: &Target) -> [usize; 2] {
@@ -125,9 +138,12 @@ pub(super) fn half_sizes(target: &Target) -> [usize; 2] {
 
 /// ½Σr² on each half of the model with `effects`, each predicted by a fit on
 /// the other half (one Gauss–Newton step from `effects`' values, the
-/// parameters the other half hardly sees held), and for each free parameter
-/// whether it acts in both halves.
-fn two_fold(target: &Target, effects: &[(&Candidate, &[f64])]) -> Option<([f64; 2], Vec<Acting>)> {
+/// parameters the other half hardly sees held), for each free parameter
+/// whether it acts in both halves, and each parameter's half-split spread.
+fn two_fold(
+    target: &Target,
+    effects: &[(&Candidate, &[f64])],
+) -> Option<([f64; 2], Vec<Acting>, Spread)> {
     let m = target.n_residuals();
     let mut r0 = vec![0.0; m];
     target.residuals(effects, &mut r0).ok()?;
@@ -189,6 +205,7 @@ fn two_fold(target: &Target, effects: &[(&Candidate, &[f64])]) -> Option<([f64; 
         })
         .collect();
     let mut out = [0.0; 2];
+    let mut steps: Vec<Vec<f64>> = Vec::with_capacity(2);
     for (h, o) in out.iter_mut().enumerate() {
         // Fitted on the other half, with what it sees.
         let seen: Vec<Vec<f64>> = (columns.iter().zip(&shares))
@@ -202,6 +219,7 @@ fn two_fold(target: &Target, effects: &[(&Candidate, &[f64])]) -> Option<([f64; 
             .collect();
         let columns = &seen;
         let delta = half_step(columns, &r0, |row| !in_half(row, h));
+        steps.push(delta.clone());
         *o = 0.5
             * (0..m)
                 .filter(|&row| in_half(row, h))
@@ -211,7 +229,33 @@ fn two_fold(target: &Target, effects: &[(&Candidate, &[f64])]) -> Option<([f64; 
                 })
                 .sum::<f64>();
     }
-    Some((out, acting))
+    let mut spread: Spread = effects
+        .iter()
+        .map(|(c, _)| vec![None; c.params.len()])
+        .collect();
+    for (k, (&(e, i), sh)) in free.iter().zip(&shares).enumerate() {
+        if sh[0] >= ACTS_IN_HALF && sh[1] >= ACTS_IN_HALF {
+            spread[e][i] = Some(0.5 * (steps[0][k] - steps[1][k]).abs());
+        }
+    }
+    Some((out, acting, spread))
+}
+
+/// The standard errors of `params` (the effect at `index` of the model a
+/// [`HeldOut`] was checked with) widened to the halves' spread where it is the
+/// larger: a ± that a model still wrong cannot make small.
+pub(super) fn widen(params: &mut [FittedParam], held: &HeldOut, index: usize) {
+    let Some(spread) = held.spread.get(index) else {
+        return;
+    };
+    for (p, s) in params.iter_mut().zip(spread) {
+        if let Some(s) = s
+            && p.std_error.is_finite()
+            && *s > p.std_error
+        {
+            p.std_error = *s;
+        }
+    }
 }
 
 /// The Gauss–Newton step `δ` minimising ‖r + Jδ‖² over the rows `train`
@@ -281,11 +325,37 @@ mod tests {
     }
 
     #[test]
+    fn a_change_at_the_edge_has_an_edge_time_and_a_lag_has_none() {
+        use crate::effect::{EffectKind, EffectParam};
+        use crate::recording::Signal;
+        let t: Vec<f64> = (0..1000).map(|k| k as f64 * 0.01).collect();
+        let rec = Recording::new(t.clone(), vec![Signal::new("y", t)]).unwrap();
+        let candidate = |param: &str| Candidate {
+            id: param.into(),
+            name: param.into(),
+            kind: EffectKind::AbruptChange,
+            acts_on: "y".into(),
+            params: vec![EffectParam::new(param, "s", 1.0, (0.0, 10.0), 1.0)],
+        };
+        // A fault 40 ms into a 10 s record: at the edge, and no event.
+        assert_eq!(edge_time(&candidate("t_fault"), &[0.04], &rec), Some(0.04));
+        assert!(!is_event(&candidate("t_fault"), &[0.04], &rec));
+        // Mid-record: an event, not at the edge.
+        assert_eq!(edge_time(&candidate("t_fault"), &[5.0], &rec), None);
+        assert!(is_event(&candidate("t_fault"), &[5.0], &rec));
+        // A sensor's lag of 2.5 ms, or of 5 s, is a duration, not a time of the record (a
+        // pair with a lag was refused as "at the edge").
+        assert_eq!(edge_time(&candidate("tau"), &[0.0025], &rec), None);
+        assert!(!is_event(&candidate("tau"), &[5.0], &rec));
+    }
+
+    #[test]
     fn an_effect_fitted_to_noise_does_not_lower_the_held_out_error() {
         let mut held = HeldOut {
             without: [10.0, 10.0],
             with: [9.0, 10.5],
             judged: true,
+            spread: Vec::new(),
         };
         assert!(!held.lowers());
         held.with = [9.0, 9.5];

@@ -194,8 +194,10 @@ pub struct FittedParam {
     pub unit: String,
     /// Fitted value.
     pub value: f64,
-    /// Standard error, scaled for the residual's effective sample size
-    /// (infinite when the parameter sits at a bound, or the data do not
+    /// Standard error: the fit's sandwich over its residual
+    /// ([`crate::fit::FitReport::robust_std_errors`]), and for a chosen effect
+    /// no smaller than half the difference of its fits on the recording's two
+    /// halves (infinite when the parameter sits at a bound, or the data do not
     /// determine it).
     pub std_error: f64,
     /// `Some("lower")` or `Some("upper")` when the fit ended on that bound of
@@ -1062,6 +1064,8 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
     }
 
     let mut chosen: Vec<RankedCandidate> = Vec::new();
+    // The chosen single effect with its ± widened to the halves' spread, for the ranking.
+    let mut widened: Option<RankedCandidate> = None;
     let mut verdict;
     let mut after_weighted = base_weighted.clone();
     let mut judged_after = judged_before.clone();
@@ -1218,9 +1222,19 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         }
         // The first effect holds too: fitted on either half, it predicts the other half
         // better than the model without it.
-        if let Some(why) = first_not_held_out(&target, best) {
+        let (why, held) = first_held_out(&target, best);
+        if let Some(why) = why {
             verdict = Verdict::Partial;
             reasons.push(why);
+        }
+        // A single effect's ± no smaller than its fits on the two halves are apart (a pair's
+        // were widened by its own check).
+        if let (Some(h), [single]) = (&held, chosen.as_mut_slice())
+            && verdict != Verdict::TwoEffects
+            && single.candidate.id == best.candidate.id
+        {
+            heldout::widen(&mut single.params, h, h.spread.len().saturating_sub(1));
+            widened = Some(single.clone());
         }
         if !all_at_floor(&judged_after, opts.floor_factor) {
             verdict = Verdict::Partial;
@@ -1243,6 +1257,13 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         ));
     } else {
         verdict = Verdict::Unexplained;
+    }
+    if let Some(w) = widened
+        && let Some(r) = ranking
+            .iter_mut()
+            .find(|r| r.candidate.id == w.candidate.id)
+    {
+        r.params = w.params;
     }
     if verdict != Verdict::NothingMissing {
         for (name, j) in names.iter().zip(&judged_after) {
@@ -1279,13 +1300,17 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
 
 /// Why the first effect `best` does not hold on held-out data: fitted on
 /// either half of the recording, it does not predict the other half better
-/// than the model without it (calibrated on that half). `None` when it holds,
+/// than the model without it (calibrated on that half); `None` when it holds,
 /// or when it is an event at one time, which a fit on the half before it
-/// cannot see.
-fn first_not_held_out(target: &Target, best: &RankedCandidate) -> Option<String> {
+/// cannot see. With the check, when it was made (the effect last of its
+/// model's effects).
+fn first_held_out(
+    target: &Target,
+    best: &RankedCandidate,
+) -> (Option<String>, Option<heldout::HeldOut>) {
     let first = best.effect();
     if heldout::is_event(&first.candidate, &first.values, target.rec) {
-        return None;
+        return (None, None);
     }
     let calibration = target.calibration.as_ref().map(|c| (c, c.initial()));
     let without: Vec<(&Candidate, &[f64])> = (calibration.iter())
@@ -1297,18 +1322,24 @@ fn first_not_held_out(target: &Target, best: &RankedCandidate) -> Option<String>
         .collect();
     let with: Vec<(&Candidate, &[f64])> = with.iter().map(|(c, v)| (c, v.as_slice())).collect();
     match heldout::held_out(target, &without, &with) {
-        Some(h) if h.lowers() => None,
-        Some(h) => Some(format!(
-            "{} ({}) lowers the error of the whole recording but not the held-out error \
-             (fitted on one half, measured on the other: {}): it does not hold throughout",
-            first.candidate.id,
-            first.candidate.name,
-            h.text(heldout::half_sizes(target))
-        )),
-        None => Some(format!(
-            "{} could not be checked on held-out data (a simulation failed)",
-            first.candidate.id
-        )),
+        Some(h) if h.lowers() => (None, Some(h)),
+        Some(h) => (
+            Some(format!(
+                "{} ({}) lowers the error of the whole recording but not the held-out error \
+                 (fitted on one half, measured on the other: {}): it does not hold throughout",
+                first.candidate.id,
+                first.candidate.name,
+                h.text(heldout::half_sizes(target))
+            )),
+            Some(h),
+        ),
+        None => (
+            Some(format!(
+                "{} could not be checked on held-out data (a simulation failed)",
+                first.candidate.id
+            )),
+            None,
+        ),
     }
 }
 

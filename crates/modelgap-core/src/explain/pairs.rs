@@ -212,6 +212,7 @@ pub(super) fn second_effect(
     // A law holds throughout: fitted on either half, the pair must predict the other half
     // better than the first alone (unless the second effect is itself an event at one time,
     // which a fit on the half before it cannot see).
+    let mut held = None;
     if !heldout::is_event(&second.candidate, &second.values, target.rec) {
         let single = [(&first_c, first_values.as_slice())];
         let pair = [
@@ -219,7 +220,7 @@ pub(super) fn second_effect(
             (&second.candidate, second.values.as_slice()),
         ];
         match heldout::held_out(target, &single, &pair) {
-            Some(h) if h.lowers() => {}
+            Some(h) if h.lowers() => held = Some(h),
             Some(h) => {
                 return Second::NotHeldOut(format!(
                     "a second effect, {} ({}), lowers the error of the whole recording but \
@@ -247,6 +248,11 @@ pub(super) fn second_effect(
     first_ranked.candidate = best.candidate.clone();
     let mut second_ranked = ranked(target, second, &white2);
     second_ranked.score = gain;
+    // The ± of both no smaller than the halves' fits are apart.
+    if let Some(h) = &held {
+        heldout::widen(&mut first_ranked.params, h, 0);
+        heldout::widen(&mut second_ranked.params, h, 1);
+    }
     Second::Kept(
         vec![first_ranked, second_ranked],
         joint_first.weighted.clone(),
