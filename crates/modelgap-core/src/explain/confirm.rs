@@ -176,7 +176,18 @@ pub(super) fn fit_pair(
     };
     let params: Vec<&crate::effect::EffectParam> =
         first.params.iter().chain(&second.params).collect();
-    let bounds: Vec<(f64, f64)> = params.iter().map(|p| (p.lower, p.upper)).collect();
+    // A parameter on a lattice (a cloth's vertex) stays where its single fit's search put it:
+    // a finite difference of a fraction of a vertex moves nothing, and each cost a simulation
+    // (the curtain's damping beside a point mass: 43 simulations for two parameters that move).
+    let bounds: Vec<(f64, f64)> = (params.iter().zip(start))
+        .map(|(p, &x)| {
+            if p.is_discrete() {
+                (x, x)
+            } else {
+                (p.lower, p.upper)
+            }
+        })
+        .collect();
     let scales: Vec<f64> = params.iter().map(|p| p.scale).collect();
     let checked = PairProblem {
         model: target.accurate.unwrap_or(target.model),
