@@ -40,6 +40,11 @@ pub(super) struct HeldOut {
     /// does not, or it is held). Noise alone puts the two fits about 2σ apart (each
     /// has half the data); a model that is still wrong puts them further.
     pub(super) spread: Vec<Vec<Option<f64>>>,
+    /// Residuals in each fold (for the RMS of the text).
+    pub(super) sizes: [usize; 2],
+    /// What the two folds are, for the text: the recording's halves, or the two
+    /// halves of what follows an event.
+    pub(super) folds: [&'static str; 2],
 }
 
 impl HeldOut {
@@ -51,15 +56,18 @@ impl HeldOut {
 
     /// The held-out RMS without and with the effect, each half, as text
     /// (weighted residuals: in units of each output's noise floor).
-    pub(super) fn text(&self, n_per_half: [usize; 2]) -> String {
+    pub(super) fn text(&self) -> String {
         if !self.judged {
             return "it acts mostly in one half, so the halves cannot test it".to_string();
         }
+        let n_per_half = self.sizes;
         let rms = |cost: f64, n: usize| (2.0 * cost / n.max(1) as f64).sqrt();
         format!(
-            "first half {:.3} → {:.3}, second half {:.3} → {:.3} times the floor",
+            "{} {:.3} → {:.3}, {} {:.3} → {:.3} times the floor",
+            self.folds[0],
             rms(self.without[0], n_per_half[0]),
             rms(self.with[0], n_per_half[0]),
+            self.folds[1],
             rms(self.without[1], n_per_half[1]),
             rms(self.with[1], n_per_half[1]),
         )
@@ -78,6 +86,17 @@ pub(super) fn is_event(c: &Candidate, values: &[f64], rec: &Recording) -> bool {
     };
     let margin = 0.05 * (t1 - t0);
     (c.params.iter().zip(values)).any(|(p, v)| is_time(p) && *v > t0 + margin && *v < t1 - margin)
+}
+
+/// The time of a candidate at `values` that is an event inside the recording
+/// ([`is_event`]).
+pub(super) fn event_time(c: &Candidate, values: &[f64], rec: &Recording) -> Option<f64> {
+    if !is_event(c, values, rec) {
+        return None;
+    }
+    (c.params.iter().zip(values))
+        .find(|(p, _)| is_time(p))
+        .map(|(_, v)| *v)
 }
 
 /// Whether a parameter is a time in the recording (`t_fault`, a law's `t_step`), not a
@@ -106,8 +125,61 @@ pub(super) fn held_out(
     without: &[(&Candidate, &[f64])],
     with: &[(&Candidate, &[f64])],
 ) -> Option<HeldOut> {
-    let (cost_without, _, _) = two_fold(target, without)?;
-    let (cost_with, acting, spread) = two_fold(target, with)?;
+    let n = target.rec.len();
+    let folds = Folds {
+        of: (0..n).map(|k| Some(usize::from(k >= n / 2))).collect(),
+        names: ["first half", "second half"],
+        hold_times: false,
+    };
+    check(target, without, with, &folds)
+}
+
+/// The held-out error of an event at `t_event` (a step, a fault at a time inside the
+/// record, which a fit on the half before it cannot see): the two folds are the two halves
+/// of what follows it, each predicted by a fit on the other and on everything before the
+/// event, the event's time held. A change that holds after it lowers both; a step fitted
+/// to a wander of the noise or to what the model still lacks does not.
+pub(super) fn held_out_after(
+    target: &Target,
+    without: &[(&Candidate, &[f64])],
+    with: &[(&Candidate, &[f64])],
+    t_event: f64,
+) -> Option<HeldOut> {
+    let t = target.rec.t();
+    let t1 = *t.last()?;
+    let mid = 0.5 * (t_event + t1);
+    let folds = Folds {
+        of: (t.iter())
+            .map(|&tk| (tk >= t_event).then_some(usize::from(tk >= mid)))
+            .collect(),
+        names: [
+            "the first half after the event",
+            "the second half after the event",
+        ],
+        hold_times: true,
+    };
+    check(target, without, with, &folds)
+}
+
+/// The two held-out folds: for each sample, the fold it is held out in (`None`:
+/// always fitted on).
+struct Folds {
+    of: Vec<Option<usize>>,
+    names: [&'static str; 2],
+    /// Whether times of the record (an event's `t_fault`) are held.
+    hold_times: bool,
+}
+
+fn check(
+    target: &Target,
+    without: &[(&Candidate, &[f64])],
+    with: &[(&Candidate, &[f64])],
+    folds: &Folds,
+) -> Option<HeldOut> {
+    let (cost_without, _, _) = two_fold(target, without, folds)?;
+    let (cost_with, acting, spread) = two_fold(target, with, folds)?;
+    let m = target.names.len();
+    let sizes = [0, 1].map(|h| m * folds.of.iter().filter(|f| **f == Some(h)).count());
     // Judged when every parameter the effect adds acts in both halves.
     let before: Vec<&str> = (without.iter())
         .flat_map(|(c, _)| c.params.iter().map(|p| p.name.as_str()))
@@ -120,6 +192,8 @@ pub(super) fn held_out(
         with: cost_with,
         judged,
         spread,
+        sizes,
+        folds: folds.names,
     })
 }
 
@@ -129,13 +203,6 @@ type Acting = (String, bool);
 /// Per effect, per parameter: half the difference of its two halves' fits.
 type Spread = Vec<Vec<Option<f64>>>;
 
-/// The samples in each half of the recording.
-pub(super) fn half_sizes(target: &Target) -> [usize; 2] {
-    let n = target.rec.len();
-    let m = target.names.len();
-    [m * (n / 2), m * (n - n / 2)]
-}
-
 /// ½Σr² on each half of the model with `effects`, each predicted by a fit on
 /// the other half (one Gauss–Newton step from `effects`' values, the
 /// parameters the other half hardly sees held), for each free parameter
@@ -143,6 +210,7 @@ pub(super) fn half_sizes(target: &Target) -> [usize; 2] {
 fn two_fold(
     target: &Target,
     effects: &[(&Candidate, &[f64])],
+    folds: &Folds,
 ) -> Option<([f64; 2], Vec<Acting>, Spread)> {
     let m = target.n_residuals();
     let mut r0 = vec![0.0; m];
@@ -155,6 +223,7 @@ fn two_fold(
         .flat_map(|(e, (c, _))| {
             (c.params.iter().enumerate())
                 .filter(|(_, p)| !p.is_discrete() && p.lower < p.upper)
+                .filter(|(_, p)| !(folds.hold_times && is_time(p)))
                 .map(move |(i, _)| (e, i))
         })
         .collect();
@@ -181,25 +250,28 @@ fn two_fold(
         })
         .collect::<Option<Vec<_>>>()?;
     let n = target.rec.len();
-    let half = n / 2;
-    let in_half = |row: usize, h: usize| ((row % n) < half) == (h == 0);
-    // Each column's share of what it moves in each half.
-    let shares: Vec<[f64; 2]> = (columns.iter())
+    let in_half = |row: usize, h: usize| folds.of.get(row % n).copied().flatten() == Some(h);
+    // Each column's share of what it moves in each fold, and in what each fold is
+    // predicted from (everything but it).
+    let shares: Vec<([f64; 2], [f64; 2])> = (columns.iter())
         .map(|col| {
             let total: f64 = col.iter().map(|v| v * v).sum();
-            let first: f64 = (0..m)
-                .filter(|&row| in_half(row, 0))
-                .map(|row| col[row].powi(2))
-                .sum();
+            let within = |h: usize| -> f64 {
+                (0..m)
+                    .filter(|&row| in_half(row, h))
+                    .map(|row| col[row].powi(2))
+                    .sum()
+            };
             if total > 0.0 {
-                [first / total, 1.0 - first / total]
+                let (a, b) = (within(0) / total, within(1) / total);
+                ([a, b], [1.0 - a, 1.0 - b])
             } else {
-                [0.0, 0.0]
+                ([0.0, 0.0], [0.0, 0.0])
             }
         })
         .collect();
     let acting: Vec<Acting> = (free.iter().zip(&shares))
-        .map(|(&(e, i), sh)| {
+        .map(|(&(e, i), (sh, _))| {
             let name = effects[e].0.params[i].name.clone();
             (name, sh[0] >= ACTS_IN_HALF && sh[1] >= ACTS_IN_HALF)
         })
@@ -207,10 +279,10 @@ fn two_fold(
     let mut out = [0.0; 2];
     let mut steps: Vec<Vec<f64>> = Vec::with_capacity(2);
     for (h, o) in out.iter_mut().enumerate() {
-        // Fitted on the other half, with what it sees.
+        // Fitted on the rest, with what it sees.
         let seen: Vec<Vec<f64>> = (columns.iter().zip(&shares))
-            .map(|(col, sh)| {
-                if sh[1 - h] >= ACTS_IN_HALF {
+            .map(|(col, (_, trained))| {
+                if trained[h] >= ACTS_IN_HALF {
                     col.clone()
                 } else {
                     vec![0.0; m]
@@ -233,8 +305,8 @@ fn two_fold(
         .iter()
         .map(|(c, _)| vec![None; c.params.len()])
         .collect();
-    for (k, (&(e, i), sh)) in free.iter().zip(&shares).enumerate() {
-        if sh[0] >= ACTS_IN_HALF && sh[1] >= ACTS_IN_HALF {
+    for (k, (&(e, i), (sh, _))) in free.iter().zip(&shares).enumerate() {
+        if sh[0] >= ACTS_IN_HALF && sh[1] >= ACTS_IN_HALF && !folds.hold_times {
             spread[e][i] = Some(0.5 * (steps[0][k] - steps[1][k]).abs());
         }
     }
@@ -356,6 +428,8 @@ mod tests {
             with: [9.0, 10.5],
             judged: true,
             spread: Vec::new(),
+            sizes: [1, 1],
+            folds: ["first half", "second half"],
         };
         assert!(!held.lowers());
         held.with = [9.0, 9.5];

@@ -210,17 +210,22 @@ pub(super) fn second_effect(
         ));
     }
     // A law holds throughout: fitted on either half, the pair must predict the other half
-    // better than the first alone (unless the second effect is itself an event at one time,
-    // which a fit on the half before it cannot see).
-    let mut held = None;
-    if !heldout::is_event(&second.candidate, &second.values, target.rec) {
+    // better than the first alone. An event at one time, which a fit on the half before it
+    // cannot see, must hold after it: fitted on either half of what follows it (and all
+    // before), predict the other half better.
+    let held = {
         let single = [(&first_c, first_values.as_slice())];
         let pair = [
             (&first_c, joint_first.values.as_slice()),
             (&second.candidate, second.values.as_slice()),
         ];
-        match heldout::held_out(target, &single, &pair) {
-            Some(h) if h.lowers() => held = Some(h),
+        // An event inside the record is held out on the two halves of what follows it.
+        let check = match heldout::event_time(&second.candidate, &second.values, target.rec) {
+            Some(t) => heldout::held_out_after(target, &single, &pair, t),
+            None => heldout::held_out(target, &single, &pair),
+        };
+        match check {
+            Some(h) if h.lowers() => h,
             Some(h) => {
                 return Second::NotHeldOut(format!(
                     "a second effect, {} ({}), lowers the error of the whole recording but \
@@ -228,7 +233,7 @@ pub(super) fn second_effect(
                      it is not added",
                     second.candidate.id,
                     second.candidate.name,
-                    h.text(heldout::half_sizes(target))
+                    h.text()
                 ));
             }
             None => {
@@ -239,7 +244,7 @@ pub(super) fn second_effect(
                 ));
             }
         }
-    }
+    };
     let white2 = Whitening {
         cost_before: target.whitened_cost(base_weighted, &rhos2),
         rhos: rhos2,
@@ -249,10 +254,8 @@ pub(super) fn second_effect(
     let mut second_ranked = ranked(target, second, &white2);
     second_ranked.score = gain;
     // The ± of both no smaller than the halves' fits are apart.
-    if let Some(h) = &held {
-        heldout::widen(&mut first_ranked.params, h, 0);
-        heldout::widen(&mut second_ranked.params, h, 1);
-    }
+    heldout::widen(&mut first_ranked.params, &held, 0);
+    heldout::widen(&mut second_ranked.params, &held, 1);
     Second::Kept(
         vec![first_ranked, second_ranked],
         joint_first.weighted.clone(),
