@@ -74,47 +74,42 @@ impl HeldOut {
     }
 }
 
-/// Whether a candidate at `values` is an event inside the recording (a step,
-/// a fault at `t` more than a twentieth of the record from either end): a fit
-/// on the half before it cannot see it, so it has no held-out error. One at
-/// the record's very edge is a constant in disguise (a mass "changing" at
-/// 3 ms re-calibrates the mass) and is held out like any other.
-pub(super) fn is_event(c: &Candidate, values: &[f64], rec: &Recording) -> bool {
-    let t = rec.t();
-    let (Some(&t0), Some(&t1)) = (t.first(), t.last()) else {
-        return false;
-    };
-    let margin = 0.05 * (t1 - t0);
-    (c.params.iter().zip(values)).any(|(p, v)| is_time(p) && *v > t0 + margin && *v < t1 - margin)
+/// The time of a candidate at `values` that is an event inside the recording (a
+/// step, a fault at `t` more than a twentieth of the record from either end), which
+/// a fit on the half before it cannot see: it is held out on what follows it
+/// ([`held_out_after`]). One at the record's very edge is a constant in disguise
+/// (a mass "changing" at 3 ms re-calibrates the mass): see [`edge_time`].
+pub(super) fn event_time(c: &Candidate, values: &[f64], rec: &Recording) -> Option<f64> {
+    time_of(c, values).filter(|&t| inside(t, rec))
 }
 
-/// The time of a candidate at `values` that is an event inside the recording
-/// ([`is_event`]).
-pub(super) fn event_time(c: &Candidate, values: &[f64], rec: &Recording) -> Option<f64> {
-    if !is_event(c, values, rec) {
-        return None;
-    }
+/// The time (s) of a candidate at `values` that changes at one time within a twentieth
+/// of the record's edge (a step or a fault at `t` that [`event_time`] does not count): there
+/// a change cannot be told from the initial state or from a constant.
+pub(super) fn edge_time(c: &Candidate, values: &[f64], rec: &Recording) -> Option<f64> {
+    time_of(c, values).filter(|&t| !inside(t, rec))
+}
+
+/// The value of a candidate's time in the recording (`t_fault`, a law's `t_step`), if it
+/// has one: a parameter in s named `t` or `t_…`, not a duration such as a lag's `tau`.
+fn time_of(c: &Candidate, values: &[f64]) -> Option<f64> {
     (c.params.iter().zip(values))
         .find(|(p, _)| is_time(p))
         .map(|(_, v)| *v)
 }
 
-/// Whether a parameter is a time in the recording (`t_fault`, a law's `t_step`), not a
-/// duration such as a lag's `tau`.
 fn is_time(p: &crate::effect::EffectParam) -> bool {
     p.unit == "s" && (p.name == "t" || p.name.starts_with("t_"))
 }
 
-/// The time (s) of a candidate at `values` that changes at one time within a twentieth
-/// of the record's edge (a step or a fault at `t` that [`is_event`] does not count): there
-/// a change cannot be told from the initial state or from a constant.
-pub(super) fn edge_time(c: &Candidate, values: &[f64], rec: &Recording) -> Option<f64> {
-    if is_event(c, values, rec) {
-        return None;
-    }
-    (c.params.iter().zip(values))
-        .find(|(p, _)| is_time(p))
-        .map(|(_, v)| *v)
+/// Whether `t` is more than a twentieth of the record from either end.
+fn inside(t: f64, rec: &Recording) -> bool {
+    let times = rec.t();
+    let (Some(&t0), Some(&t1)) = (times.first(), times.last()) else {
+        return false;
+    };
+    let margin = 0.05 * (t1 - t0);
+    t > t0 + margin && t < t1 - margin
 }
 
 /// The held-out error of the model without and with an effect: `without`
@@ -250,7 +245,7 @@ fn two_fold(
         })
         .collect::<Option<Vec<_>>>()?;
     let n = target.rec.len();
-    let in_half = |row: usize, h: usize| folds.of.get(row % n).copied().flatten() == Some(h);
+    let in_fold = |row: usize, h: usize| folds.of.get(row % n).copied().flatten() == Some(h);
     // Each column's share of what it moves in each fold, and in what each fold is
     // predicted from (everything but it).
     let shares: Vec<([f64; 2], [f64; 2])> = (columns.iter())
@@ -258,7 +253,7 @@ fn two_fold(
             let total: f64 = col.iter().map(|v| v * v).sum();
             let within = |h: usize| -> f64 {
                 (0..m)
-                    .filter(|&row| in_half(row, h))
+                    .filter(|&row| in_fold(row, h))
                     .map(|row| col[row].powi(2))
                     .sum()
             };
@@ -290,11 +285,11 @@ fn two_fold(
             })
             .collect();
         let columns = &seen;
-        let delta = half_step(columns, &r0, |row| !in_half(row, h));
+        let delta = half_step(columns, &r0, |row| !in_fold(row, h));
         steps.push(delta.clone());
         *o = 0.5
             * (0..m)
-                .filter(|&row| in_half(row, h))
+                .filter(|&row| in_fold(row, h))
                 .map(|row| {
                     let moved: f64 = (columns.iter().zip(&delta)).map(|(c, d)| c[row] * d).sum();
                     (r0[row] + moved).powi(2)
@@ -411,14 +406,14 @@ mod tests {
         };
         // A fault 40 ms into a 10 s record: at the edge, and no event.
         assert_eq!(edge_time(&candidate("t_fault"), &[0.04], &rec), Some(0.04));
-        assert!(!is_event(&candidate("t_fault"), &[0.04], &rec));
+        assert_eq!(event_time(&candidate("t_fault"), &[0.04], &rec), None);
         // Mid-record: an event, not at the edge.
         assert_eq!(edge_time(&candidate("t_fault"), &[5.0], &rec), None);
-        assert!(is_event(&candidate("t_fault"), &[5.0], &rec));
+        assert_eq!(event_time(&candidate("t_fault"), &[5.0], &rec), Some(5.0));
         // A sensor's lag of 2.5 ms, or of 5 s, is a duration, not a time of the record (a
         // pair with a lag was refused as "at the edge").
         assert_eq!(edge_time(&candidate("tau"), &[0.0025], &rec), None);
-        assert!(!is_event(&candidate("tau"), &[5.0], &rec));
+        assert_eq!(event_time(&candidate("tau"), &[5.0], &rec), None);
     }
 
     #[test]

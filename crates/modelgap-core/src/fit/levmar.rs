@@ -482,7 +482,8 @@ impl Solver<'_> {
                             };
                             *mu *= f64::max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0).powi(3));
                             *nu = 2.0;
-                            let (x_before, r_before) = (self.x.clone(), self.r.clone());
+                            // Where the Jacobian was, for the secant update.
+                            let before = self.opts.secant.then(|| (self.x.clone(), self.r.clone()));
                             std::mem::swap(&mut self.x, &mut self.x_trial);
                             std::mem::swap(&mut self.r, &mut self.r_trial);
                             self.cost = cost_trial;
@@ -490,7 +491,7 @@ impl Solver<'_> {
                             if rho > EXTEND_RATIO && !done {
                                 self.extend(&d);
                             }
-                            if self.opts.secant {
+                            if let Some((x_before, r_before)) = before {
                                 // The whole move, extensions included, from where the
                                 // Jacobian was.
                                 let moved: Vec<f64> = (0..n)
