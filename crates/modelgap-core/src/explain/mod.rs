@@ -1092,6 +1092,8 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             Verdict::CannotJudge
         };
     } else if let Some(best) = best {
+        // With a pair chosen, why its first does not hold beside its second (if it does not).
+        let mut pair_first: Option<Option<String>> = None;
         chosen.push(best.clone());
         verdict = Verdict::EffectFound;
         if let Some(f) = fitted.iter().find(|f| f.candidate.id == best.candidate.id) {
@@ -1148,7 +1150,8 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
                 .filter(|(i, r)| *i < PAIR_POOL || r.candidate.id.starts_with("law@"))
                 .filter_map(|(_, r)| candidates.iter().find(|c| c.id == r.candidate.id).cloned())
                 .collect();
-            let mut second: Option<(Vec<RankedCandidate>, Vec<f64>)> = None;
+            // The best pair, its weighted residual and the first it was built on.
+            let mut second: Option<(Vec<RankedCandidate>, Vec<f64>, &RankedCandidate)> = None;
             let mut not_held_out: Vec<String> = Vec::new();
             // Each first's seconds are screened on top of it, and its best few fitted jointly
             // with it. (Dropping a first or a second by what the screen on top says it gains
@@ -1168,7 +1171,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
                     reference,
                     &base_weighted,
                 ) {
-                    Second::Kept(pair, weighted) => Some((pair, weighted)),
+                    Second::Kept(pair, weighted) => Some((pair, weighted, first)),
                     Second::NotHeldOut(why) => {
                         not_held_out.push(why);
                         None
@@ -1191,7 +1194,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
                 if let Some(p) = pair
                     && second
                         .as_ref()
-                        .is_none_or(|(q, _)| evidence(&p.0) > evidence(q))
+                        .is_none_or(|(q, _, _)| evidence(&p.0) > evidence(q))
                 {
                     second = Some(p);
                 }
@@ -1204,7 +1207,18 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
                 ex.timings = clock.into_laps();
                 return Ok(ex);
             }
-            if let Some((mut pair, weighted)) = second {
+            if let Some((mut pair, weighted, first)) = second {
+                // The first it was built on holds beside its second: the pair predicts held-out
+                // data better than the second alone (an offset beside a drift holds, though
+                // alone it does not). A second found only on top of the first has no fit of
+                // its own: the first is checked alone.
+                let alone = (ranking.iter()).find(|r| {
+                    r.candidate.id == pair[1].candidate.id && r.error.is_none() && !r.screened
+                });
+                pair_first = Some(match alone {
+                    Some(alone) => pair_first_held_out(&target, &pair[0], &pair[1], alone),
+                    None => first_held_out(&target, first).0,
+                });
                 // The pair in the order of each effect's own evidence alone.
                 let single = |id: &str| {
                     (ranking.iter())
@@ -1221,8 +1235,12 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             }
         }
         // The first effect holds too: fitted on either half, it predicts the other half
-        // better than the model without it.
-        let (why, held) = first_held_out(&target, best);
+        // better than the model without it (with a pair chosen, the pair's first, checked
+        // beside its second above).
+        let (why, held) = match pair_first {
+            Some(why) => (why, None),
+            None => first_held_out(&target, best),
+        };
         if let Some(why) = why {
             verdict = Verdict::Partial;
             reasons.push(why);
@@ -1342,6 +1360,55 @@ fn first_held_out(
             )),
             None,
         ),
+    }
+}
+
+/// Why the first effect of a chosen pair does not hold beside its second:
+/// fitted on either half of the recording, the pair does not predict the other
+/// half better than `alone`, the second fitted alone (with the calibration as
+/// fitted with it); an event on the two halves of what follows it. `first` and
+/// `second` as fitted jointly, the calibration the first's. `None` when it holds.
+fn pair_first_held_out(
+    target: &Target,
+    first: &RankedCandidate,
+    second: &RankedCandidate,
+    alone: &RankedCandidate,
+) -> Option<String> {
+    let prepare = |list: Vec<(Candidate, Vec<f64>)>| -> Vec<(Candidate, Vec<f64>)> {
+        (list.into_iter())
+            .map(|(c, v)| (prepared(&c, target.rec), v))
+            .collect()
+    };
+    let without = prepare(target.with_first(alone));
+    let second_effect = second.effect();
+    let mut with = prepare(target.with_first(first));
+    with.push((
+        prepared(&second_effect.candidate, target.rec),
+        second_effect.values,
+    ));
+    fn view(list: &[(Candidate, Vec<f64>)]) -> Vec<(&Candidate, &[f64])> {
+        list.iter().map(|(c, v)| (c, v.as_slice())).collect()
+    }
+    let (without, with_view) = (view(&without), view(&with));
+    let effect = first.effect();
+    let check = match heldout::event_time(&effect.candidate, &effect.values, target.rec) {
+        Some(t) => heldout::held_out_after(target, &without, &with_view, t),
+        None => heldout::held_out(target, &without, &with_view),
+    };
+    match check {
+        Some(h) if h.lowers() => None,
+        Some(h) => Some(format!(
+            "{} ({}) beside {} lowers the error of the whole recording but not the held-out              error below {} alone (fitted on one half, measured on the other: {}): it does not              hold throughout",
+            first.candidate.id,
+            first.candidate.name,
+            second.candidate.id,
+            second.candidate.id,
+            h.text()
+        )),
+        None => Some(format!(
+            "{} could not be checked beside {} on held-out data (a simulation failed)",
+            first.candidate.id, second.candidate.id
+        )),
     }
 }
 
