@@ -1148,7 +1148,19 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
                 .filter(|r| r.error.is_none() && r.cost < cost_before)
                 .enumerate()
                 .filter(|(i, r)| *i < PAIR_POOL || r.candidate.id.starts_with("law@"))
-                .filter_map(|(_, r)| candidates.iter().find(|c| c.id == r.candidate.id).cloned())
+                .filter_map(|(_, r)| {
+                    let mut c = candidates.iter().find(|c| c.id == r.candidate.id)?.clone();
+                    // A parameter on a lattice (a cloth's vertex) is screened where its single's
+                    // search put it, as the pair's fit holds it: searching the lattice again on
+                    // top of each first cost the curtain 32 simulations a first.
+                    for (p, fitted) in c.params.iter_mut().zip(&r.params) {
+                        if p.is_discrete() {
+                            p.initial = fitted.value;
+                            p.grid = 0;
+                        }
+                    }
+                    Some(c)
+                })
                 .collect();
             // The best pair, its weighted residual and the first it was built on.
             let mut second: Option<(Vec<RankedCandidate>, Vec<f64>, &RankedCandidate)> = None;
