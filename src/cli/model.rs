@@ -49,8 +49,9 @@ impl ModelArgs {
 #[derive(Debug, Default, Args)]
 pub struct CsvArgs {
     /// CSV and Parquet recordings: the time column, named as in the header, with or without
-    /// its unit (default: the column `t`, else the one named `t` or `time` in any case, with
-    /// any unit)
+    /// its unit (default: the column `t`, else the one named `t` with a unit, else the one
+    /// named `t` or `time` in any case, with any unit; of several, one whose unit is no time
+    /// unit, such as `T [degC]`, is not time)
     #[arg(long = "time", value_name = "COL")]
     pub time: Option<String>,
 

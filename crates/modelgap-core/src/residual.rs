@@ -473,6 +473,26 @@ pub struct FailureWindow {
     pub sign: i8,
 }
 
+/// The `n` windows with the largest peaks, in time order: what a list of a few shows of
+/// many (a recording whose error grows after a quiet start would otherwise show the quiet
+/// part's noise excursions first).
+///
+/// ```
+/// # use modelgap_core::residual::{failure_windows, largest_windows};
+/// let t = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
+/// let r = [2.0, 0.0, 9.0, 0.0, 3.0, 0.0, 5.0];
+/// let w = failure_windows(&t, &r, 1.0, 0.0);
+/// let starts: Vec<f64> = largest_windows(&w, 2).iter().map(|w| w.start).collect();
+/// assert_eq!(starts, [2.0, 6.0]);
+/// ```
+pub fn largest_windows(windows: &[FailureWindow], n: usize) -> Vec<&FailureWindow> {
+    let mut by_peak: Vec<&FailureWindow> = windows.iter().collect();
+    by_peak.sort_by(|a, b| b.peak.total_cmp(&a.peak));
+    by_peak.truncate(n);
+    by_peak.sort_by(|a, b| a.start.total_cmp(&b.start));
+    by_peak
+}
+
 /// The intervals where `|residual| > band`.
 ///
 /// Runs of consecutive samples outside the band become windows from their first to their

@@ -218,10 +218,8 @@ pub fn comparison_text(c: &Comparison) -> String {
                 o.unit
             );
         } else {
-            let shown: Vec<String> = o
-                .windows
-                .iter()
-                .take(6)
+            let shown: Vec<String> = crate::residual::largest_windows(&o.windows, 6)
+                .into_iter()
                 .map(|w| {
                     format!(
                         "{}–{} s (peak {} at {} s)",
@@ -233,7 +231,7 @@ pub fn comparison_text(c: &Comparison) -> String {
                 })
                 .collect();
             let more = if o.windows.len() > 6 {
-                format!(" and {} more", o.windows.len() - 6)
+                format!(" and {} with smaller peaks", o.windows.len() - 6)
             } else {
                 String::new()
             };
@@ -426,13 +424,15 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
             );
         }
         if ex.verdict == Verdict::Partial && !o.remaining_windows.is_empty() {
-            let w: Vec<String> = o
-                .remaining_windows
-                .iter()
-                .take(5)
+            let w: Vec<String> = crate::residual::largest_windows(&o.remaining_windows, 5)
+                .into_iter()
                 .map(|w| format!("{}–{} s", num(w.start), num(w.end)))
                 .collect();
-            let _ = writeln!(s, "           still fails at {}", w.join(", "));
+            let more = match o.remaining_windows.len() {
+                n if n > 5 => format!(" and {} with smaller peaks", n - 5),
+                _ => String::new(),
+            };
+            let _ = writeln!(s, "           still fails at {}{more}", w.join(", "));
         }
     }
     let skip = usize::from(ex.verdict == Verdict::CannotJudge);

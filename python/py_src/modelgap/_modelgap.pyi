@@ -153,9 +153,10 @@ class Recording:
         A CSV file has a header naming the columns and one row per sample; lines starting with
         ``#`` are comments. Files as pandas, R or a spreadsheet export them read as they are:
         quoted cells; a first column of row numbers (pandas' unnamed index, R's row names) is
-        left out; the time column is ``t``, else the one named ``t`` or ``time`` in any case,
-        anywhere in the header, with or without a unit (``time [ms]`` is converted to
-        seconds); ``;`` or tabs between cells are detected, and with them decimal commas
+        left out; the time column is ``t``, else the one named ``t`` with a unit, else the one
+        named ``t`` or ``time`` in any case, anywhere in the header, with or without a unit
+        (``time [ms]`` is converted to seconds; of several, one whose unit is no time unit,
+        such as ``T [degC]``, is not time); ``;`` or tabs between cells are detected, and with them decimal commas
         (``1,5``); ``name [unit]`` headers and a unit row under the header give units.
 
         A Parquet file reads as pandas (``df.to_parquet()``, Snappy) and Polars

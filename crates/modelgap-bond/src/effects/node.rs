@@ -9,6 +9,7 @@ use super::menu::{law_value, place};
 use super::scales::Scales;
 use super::tag::Tag;
 use crate::element::{ElementKind, Law};
+use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
 
 /// What a node's storage is: the junction's declared domain, else the unit
@@ -137,14 +138,25 @@ impl Node {
         let c = (g.ports(id).into_iter())
             .map(|(b, _)| g.other_end(b, id))
             .find(|&o| g.element(o).kind == ElementKind::C)?;
-        let unit = match &g.element(c).law {
-            Law::Linear(e) => (e.params().iter())
-                .filter_map(|n| g.params().get(n))
-                .map(|p| p.unit.clone())
-                .find(|u| !u.trim().is_empty())
-                .unwrap_or_default(),
-            _ => String::new(),
+        // The unit of a parameter of the C's law: its capacity, linear (`parameter = "C"`) or
+        // written out (`effort = "q / Cth"`, Cth in J/K). One that names a kind of node
+        // first, else the first with a unit.
+        let exprs: Vec<&Expr> = match &g.element(c).law {
+            Law::Linear(e) => vec![e],
+            Law::Nonlinear { effort, flow } => effort.iter().chain(flow.iter()).collect(),
+            _ => Vec::new(),
         };
+        let units: Vec<String> = (exprs.iter())
+            .flat_map(|e| e.params())
+            .filter_map(|n| g.params().get(&n))
+            .map(|p| p.unit.clone())
+            .filter(|u| !u.trim().is_empty())
+            .collect();
+        let unit = (units.iter())
+            .find(|u| NodeKind::of_unit(u) != NodeKind::Generic)
+            .or(units.first())
+            .cloned()
+            .unwrap_or_default();
         let compact: String = unit.chars().filter(|c| !c.is_whitespace()).collect();
         let level = matches!(compact.as_str(), "m^2" | "m²");
         let of_unit = NodeKind::of_unit(&unit);
@@ -214,5 +226,75 @@ impl Node {
         params: Vec<EffectParam>,
     ) -> Candidate {
         super::junction::missing_element(tag, self.name(g), name, params)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::file::read_model;
+
+    /// A heated block whose heat capacity is written out in the C's law (`q / Cth`, Cth in
+    /// J/K): its node is thermal, in K and W, and the menu says so in its units and words.
+    #[test]
+    fn a_capacity_written_out_in_the_law_gives_the_node_its_units() {
+        let g = read_model(
+            r#"
+name = "block"
+[parameters]
+Cth = { value = 900.0, unit = "J/K", description = "heat capacity" }
+Rth = { value = 0.5, unit = "K/W", description = "convection" }
+[inputs]
+P = { default = 0.0, unit = "W", description = "heater" }
+[[elements]]
+name = "heater"
+kind = "Sf"
+flow = "P"
+[[elements]]
+name = "block"
+kind = "0"
+domain = "thermal"
+[[elements]]
+name = "Mass"
+kind = "C"
+effort = "q / Cth"
+[[elements]]
+name = "Convection"
+kind = "R"
+flow = "e / Rth"
+[[bonds]]
+from = "heater"
+to = "block"
+[[bonds]]
+from = "block"
+to = "Mass"
+[[bonds]]
+from = "block"
+to = "Convection"
+[[outputs]]
+name = "T"
+value = "Mass.q / Cth"
+unit = "K"
+"#,
+        )
+        .unwrap();
+        let id = g.find("block").unwrap();
+        let node = Node::of(&g, id).unwrap();
+        assert_eq!((node.kind, node.units_known), (NodeKind::Thermal, true));
+        assert_eq!(node.units(), ("K", "W"));
+        let menu = crate::effects::menu::candidates(&g);
+        let cubic = menu
+            .iter()
+            .find(|c| c.id.starts_with("stiffness@"))
+            .unwrap();
+        assert_eq!(cubic.params[0].unit, "K/J^3");
+        assert!(
+            cubic.name.starts_with("a heat capacity that changes"),
+            "{}",
+            cubic.name
+        );
+        let relief = menu.iter().find(|c| c.id.starts_with("overflow@")).unwrap();
+        let units: Vec<&str> = relief.params.iter().map(|p| p.unit.as_str()).collect();
+        assert_eq!(units, ["K", "W/K"]);
     }
 }

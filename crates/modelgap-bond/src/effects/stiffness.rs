@@ -8,6 +8,7 @@ use modelgap_core::{Candidate, EffectKind, EffectParam};
 use super::def::{EffectDef, all_zero};
 use super::edit::{bad, ident, law, new_param};
 use super::menu::{element_place, law_value};
+use super::node::{Node, NodeKind};
 use super::scales::Scales;
 use super::tag::Tag;
 use crate::element::{ElementKind, Law};
@@ -48,9 +49,27 @@ impl Stiffness {
         }
     }
 
+    /// The storage node the C sits on, when its kind is known (a thermal
+    /// mass, a capacitor node, a tank).
+    fn node(self, g: &BondGraph) -> Option<Node> {
+        (g.ports(self.element).into_iter())
+            .map(|(b, _)| g.other_end(b, self.element))
+            .find_map(|j| Node::of(g, j))
+            .filter(|n| n.units_known && n.kind != NodeKind::Generic)
+    }
+
     /// The unit of `k3`: one over the C's coefficient unit per displacement
-    /// squared, when its linear coefficient has a unit; else `e/q^3`.
+    /// squared, when its linear coefficient has a unit; on a node of known
+    /// units, its effort per stored quantity cubed (`K/J^3`); else `e/q^3`.
     fn unit(self, g: &BondGraph) -> String {
+        if let Some(node) = self.node(g) {
+            let stored = match node.kind {
+                NodeKind::Thermal => "J",
+                NodeKind::Electrical => "C",
+                _ => "m^3",
+            };
+            return format!("{}/{stored}^3", node.units().0);
+        }
         match &g.element(self.element).law {
             Law::Linear(c) => (c.params().iter())
                 .filter_map(|n| g.params().get(n))
@@ -97,10 +116,25 @@ impl EffectDef for Stiffness {
         let scale = (0.1 * effort_peak / q_peak.powi(3)).max(f64::MIN_POSITIVE);
         Candidate {
             id: Tag::Stiffness.id(&el.name),
-            name: format!(
-                "a cubic stiffness term in {} (hardening or softening)",
-                element_place(g, id)
-            ),
+            name: match self.node(g).map(|n| n.kind) {
+                Some(NodeKind::Thermal) => format!(
+                    "a heat capacity that changes with the heat stored: a cubic term in {}",
+                    element_place(g, id)
+                ),
+                Some(NodeKind::Electrical) => format!(
+                    "a capacitance that bends with its charge: a cubic term in {}",
+                    element_place(g, id)
+                ),
+                Some(NodeKind::Hydraulic) => format!(
+                    "a tank whose level or pressure is not proportional to its volume: a cubic \
+                     term in {}",
+                    element_place(g, id)
+                ),
+                _ => format!(
+                    "a cubic stiffness term in {} (hardening or softening)",
+                    element_place(g, id)
+                ),
+            },
             kind: EffectKind::MissingElement,
             acts_on: el.name.clone(),
             params: vec![EffectParam::new(

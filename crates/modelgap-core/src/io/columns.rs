@@ -66,8 +66,10 @@ pub(crate) fn row_index_note(column: Option<&str>, first: f64, last: f64) -> Str
 }
 
 /// The time column among `columns` (names as written): the asked one (as written or without
-/// its unit), else the column `t`, else the one column named `t` or `time` (any case, any
-/// unit). `line` is the CSV header's, `None` for a Parquet file.
+/// its unit), else the column `t`, else the one column named `t` with a unit (`t [s]`), else
+/// the one column named `t` or `time` (any case, any unit; of several, a unit that is no time
+/// unit, as in `T [degC]`, rules one out). `line` is the CSV header's, `None` for a Parquet
+/// file.
 pub(crate) fn find_time(
     columns: &[&str],
     line: Option<usize>,
@@ -81,9 +83,20 @@ pub(crate) fn find_time(
             if let Some(i) = columns.iter().position(|c| *c == TIME_NAME) {
                 return Ok(i);
             }
-            (0..columns.len())
+            let named_t: Vec<usize> = (0..columns.len())
+                .filter(|&i| split_unit(columns[i]).0 == TIME_NAME)
+                .collect();
+            if let [i] = named_t[..] {
+                return Ok(i);
+            }
+            let mut like: Vec<usize> = (0..columns.len())
                 .filter(|&i| is_time_name(columns[i]))
-                .collect()
+                .collect();
+            let timed = |i: &usize| split_unit(columns[*i]).1.is_none_or(is_time_unit);
+            if like.len() > 1 && like.iter().filter(|i| timed(i)).count() == 1 {
+                like.retain(timed);
+            }
+            like
         }
     };
     match matching[..] {
@@ -100,6 +113,11 @@ pub(crate) fn find_time(
             path: None,
         }),
     }
+}
+
+/// True for a unit of time, converted ([`per_second`]) or not (`min`, `h`, `d`).
+fn is_time_unit(unit: &str) -> bool {
+    per_second(unit).is_some() || matches!(unit, "min" | "h" | "hr" | "d" | "day")
 }
 
 /// True for a column named `t` or `time` in any case, with or without a unit.
@@ -170,6 +188,10 @@ mod tests {
         assert_eq!(find_time(&["x", "Time [ms]", "t"], None, None).unwrap(), 2);
         assert_eq!(find_time(&["x", "Time [ms]"], None, None).unwrap(), 1);
         assert_eq!(find_time(&["x", "when"], None, Some("when")).unwrap(), 1);
+        // A temperature `T` beside the time: the one named `t`, or the one with a time unit.
+        assert_eq!(find_time(&["t [s]", "T [degC]"], None, None).unwrap(), 0);
+        assert_eq!(find_time(&["Time [s]", "T [K]"], None, None).unwrap(), 0);
+        assert!(find_time(&["Time [s]", "T [ms]"], None, None).is_err());
         let e = find_time(&["T", "time"], None, None).unwrap_err();
         assert_eq!(
             e.to_string(),

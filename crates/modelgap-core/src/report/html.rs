@@ -309,9 +309,8 @@ fn windows_text(windows: &[FailureWindow], unit: &str, with_band: bool) -> Strin
                 " {n} failure window{}: ",
                 if n == 1 { "" } else { "s" }
             );
-            let listed: Vec<String> = windows
-                .iter()
-                .take(MAX_LISTED_WINDOWS)
+            let listed: Vec<String> = crate::residual::largest_windows(windows, MAX_LISTED_WINDOWS)
+                .into_iter()
                 .enumerate()
                 .map(|(k, w)| {
                     let side = match w.sign {
@@ -331,7 +330,7 @@ fn windows_text(windows: &[FailureWindow], unit: &str, with_band: bool) -> Strin
                 .collect();
             text.push_str(&listed.join("; "));
             if n > MAX_LISTED_WINDOWS {
-                let _ = write!(text, "; and {} more", n - MAX_LISTED_WINDOWS);
+                let _ = write!(text, "; and {} with smaller peaks", n - MAX_LISTED_WINDOWS);
             }
             text.push('.');
         }
