@@ -10,8 +10,8 @@ use super::tag::Tag;
 use super::{
     ActuatorGain, ActuatorLimit, Backlash, Brush, Calibration, Cogging, Coulomb, Coupling,
     DeadZone, Declared, Deviation, Factor, Fault, Faulted, Heating, Inertia, Inflow, Junction,
-    LawEffect, Leak, Load, Node, Orifice, Overflow, Saturation, SensorClip, SensorDelay, SensorLag,
-    SensorOffset, SensorScale, Stiffness, Store, Viscous,
+    LawEffect, Leak, Load, Node, Orifice, Overflow, PowerLoss, Saturation, SensorClip, SensorDelay,
+    SensorLag, SensorOffset, SensorScale, Stiffness, Store, Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::BondGraph;
@@ -56,6 +56,8 @@ pub enum BondEffect {
     Overflow(Overflow),
     /// `orifice@<node>`: turbulent outflow through an orifice (√ of the effort).
     Orifice(Orifice),
+    /// `power@<node>`: a loss growing as a power of a thermal node's temperature.
+    Power(PowerLoss),
     /// `store@<node>`: a second storage behind a resistance.
     Store(Store),
     /// `deadzone@<source>`: a dead zone in what a driven source imposes.
@@ -116,6 +118,12 @@ from_kind!(
     Declared,
     Calibration
 );
+
+impl From<PowerLoss> for BondEffect {
+    fn from(k: PowerLoss) -> BondEffect {
+        BondEffect::Power(k)
+    }
+}
 
 impl From<ActuatorGain> for BondEffect {
     fn from(k: ActuatorGain) -> BondEffect {
@@ -269,6 +277,10 @@ impl BondEffect {
                     )
                 },
             )?)),
+            Tag::Power => Some(BondEffect::Power(
+                PowerLoss::at(node()?)
+                    .ok_or_else(|| bad(c, "", format!("'{target}' is not a thermal node")))?,
+            )),
             Tag::Store => Some(BondEffect::Store(Store { node: node()? })),
             Tag::DeadZone => {
                 let d = g.find(target).and_then(|id| DeadZone::at(g, id));
@@ -405,6 +417,7 @@ impl BondEffect {
             BondEffect::Inflow(k) => k,
             BondEffect::Overflow(k) => k,
             BondEffect::Orifice(k) => k,
+            BondEffect::Power(k) => k,
             BondEffect::Store(k) => k,
             BondEffect::DeadZone(k) => k,
             BondEffect::Gain(k) => k,
@@ -442,6 +455,7 @@ impl BondEffect {
             | BondEffect::Inflow(_)
             | BondEffect::Overflow(_)
             | BondEffect::Orifice(_)
+            | BondEffect::Power(_)
             | BondEffect::Store(_)
             | BondEffect::DeadZone(_)
             | BondEffect::Gain(_)
@@ -506,6 +520,7 @@ impl BondEffect {
             Tag::Inflow => Inflow::vanishing_values(c),
             Tag::Overflow => Overflow::vanishing_values(c),
             Tag::Orifice => Orifice::vanishing_values(c),
+            Tag::Power => PowerLoss::vanishing_values(c),
             Tag::Store => Store::vanishing_values(c),
             Tag::DeadZone => DeadZone::vanishing_values(c),
             Tag::Gain => ActuatorGain::vanishing_values(c),

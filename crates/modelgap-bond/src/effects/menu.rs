@@ -8,8 +8,9 @@ use super::def::EffectDef;
 use super::scales::Scales;
 use super::{
     ActuatorGain, ActuatorLimit, Backlash, Brush, Cogging, Coulomb, Coupling, DeadZone, Declared,
-    Deviation, Factor, Fault, Heating, Inertia, Inflow, Leak, Load, Orifice, Overflow, Saturation,
-    SensorClip, SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness, Store, Viscous,
+    Deviation, Factor, Fault, Heating, Inertia, Inflow, Leak, Load, Orifice, Overflow, PowerLoss,
+    Saturation, SensorClip, SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness, Store,
+    Viscous,
 };
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
@@ -137,6 +138,11 @@ pub fn offered(g: &BondGraph) -> Vec<BondEffect> {
         )
         .chain(
             Orifice::offers(g)
+                .into_iter()
+                .map(|k| (k.node.id, k.into())),
+        )
+        .chain(
+            PowerLoss::offers(g)
                 .into_iter()
                 .map(|k| (k.node.id, k.into())),
         )

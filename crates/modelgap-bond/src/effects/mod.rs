@@ -60,7 +60,9 @@
 //!   ([`Node`]: a 0-junction with a C, any domain): [`leak`](Leak),
 //!   [`inflow`](Inflow), [`overflow`](Overflow), [`store`](Store) (a second
 //!   storage behind a resistance: a second thermal mass, a hydraulic
-//!   compliance), and on hydraulic ones [`orifice`](Orifice) (√Δp outflow);
+//!   compliance), on hydraulic ones [`orifice`](Orifice) (√Δp outflow), and on
+//!   thermal ones [`power`](PowerLoss) (a loss growing as `|T|^p`: natural
+//!   convection, radiation);
 //! - on a source an input drives, in any domain: [`deadzone`](DeadZone),
 //!   [`gain`](ActuatorGain) (the actuator delivers `k` times its command) and
 //!   [`limit`](ActuatorLimit) (it saturates at `±v_max`);
@@ -113,6 +115,7 @@ mod node;
 mod offset;
 mod orifice;
 mod overflow;
+mod power;
 mod saturation;
 mod scale;
 mod scales;
@@ -161,6 +164,7 @@ pub use node::{Node, NodeKind};
 pub use offset::SensorOffset;
 pub use orifice::Orifice;
 pub use overflow::Overflow;
+pub use power::PowerLoss;
 pub use saturation::Saturation;
 pub use scale::SensorScale;
 pub use scales::Scales;

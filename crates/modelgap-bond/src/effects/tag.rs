@@ -24,6 +24,7 @@ pub(super) enum Tag {
     Inflow,
     Overflow,
     Orifice,
+    Power,
     Store,
     DeadZone,
     Gain,
@@ -39,7 +40,7 @@ pub(super) enum Tag {
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 29] = [
+const PREFIXES: [(Tag, &str); 30] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -57,6 +58,7 @@ const PREFIXES: [(Tag, &str); 29] = [
     (Tag::Inflow, "inflow@"),
     (Tag::Overflow, "overflow@"),
     (Tag::Orifice, "orifice@"),
+    (Tag::Power, "power@"),
     (Tag::Store, "store@"),
     (Tag::DeadZone, "deadzone@"),
     (Tag::Gain, "gain@"),
@@ -127,7 +129,7 @@ mod tests {
     fn the_expected_prefixes_read_as_a_list() {
         assert_eq!(
             Tag::expected(),
-            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, backlash@, cogging@, brush@, saturation@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, store@, deadzone@, gain@, limit@, lag@, offset@, clip@, scale@, delay@, declared: or law@"
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, backlash@, cogging@, brush@, saturation@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, power@, store@, deadzone@, gain@, limit@, lag@, offset@, clip@, scale@, delay@, declared: or law@"
         );
     }
 }

@@ -10,6 +10,11 @@ use crate::effect::EffectParam;
 /// The most steps of a pair's joint fit.
 const PAIR_ITERATIONS: usize = 12;
 
+/// A start whose weighted residual is within this share (relative, in norm) of the
+/// calibrated model's is the calibrated model: the calibration's columns of the Jacobian
+/// there serve its screen.
+const NOMINAL_TOLERANCE: f64 = 1e-4;
+
 /// The most steps a fit made on the model for fitting goes on for on the model
 /// as given, when the two disagree at its end ([`checked_on_the_model_as_given`]).
 const CHECK_ITERATIONS: usize = 10;
@@ -353,18 +358,63 @@ pub(super) fn linearised_step(
             jac[(i, j)] = (r1[i] - r0[i]) / h;
         }
     }
-    let jt_j = jac.transpose() * &jac;
-    let jt_r = jac.transpose() * nalgebra::DVector::from_column_slice(&r0);
+    // From where the candidate leaves the model as calibrated, the calibration re-adjusts
+    // beside it (its columns are the same for every such start), as in the confirming fit;
+    // what the calibration alone would gain is not the candidate's.
+    // (A bond graph's edit of a missing element at 0 is not the graph as it was, but it
+    // predicts the same to the solver's tolerance.)
+    let at_nominal = problem.nominal(x0).is_some()
+        || (problem.target.nominal.as_deref()).is_some_and(|n| {
+            if n.len() != r0.len() {
+                // A problem weighing priors has their residuals after the data's.
+                return false;
+            }
+            let d: f64 = n.iter().zip(&r0).map(|(a, b)| (a - b) * (a - b)).sum();
+            let s: f64 = n.iter().map(|a| a * a).sum();
+            d <= NOMINAL_TOLERANCE * NOMINAL_TOLERANCE * s
+        });
+    let cal: &[Vec<f64>] = if at_nominal
+        && problem.base.is_empty()
+        && (problem.target.calibration_columns.iter()).all(|c| c.len() == m)
+    {
+        &problem.target.calibration_columns
+    } else {
+        &[]
+    };
+    let r0v = nalgebra::DVector::from_column_slice(&r0);
+    let cal_jac = nalgebra::DMatrix::from_fn(m, cal.len(), |i, j| cal[j][i]);
+    // The calibration's least-squares move for a residual `r`, and the residual after it.
+    let readjusted = |r: nalgebra::DVector<f64>| -> nalgebra::DVector<f64> {
+        if cal.is_empty() {
+            return r;
+        }
+        let jt = cal_jac.transpose();
+        match (&jt * &cal_jac).lu().solve(&(-(&jt * &r))) {
+            Some(d) => r + &cal_jac * d,
+            None => r,
+        }
+    };
+    let full_jac = if cal.is_empty() {
+        jac.clone()
+    } else {
+        let mut full = nalgebra::DMatrix::zeros(m, k + cal.len());
+        full.columns_mut(0, k).copy_from(&jac);
+        full.columns_mut(k, cal.len()).copy_from(&cal_jac);
+        full
+    };
+    let jt_j = full_jac.transpose() * &full_jac;
+    let jt_r = full_jac.transpose() * &r0v;
     let delta = jt_j
-        .clone()
         .lu()
         .solve(&(-jt_r))
-        .unwrap_or_else(|| nalgebra::DVector::zeros(k));
+        .unwrap_or_else(|| nalgebra::DVector::zeros(k + cal.len()));
     let x1: Vec<f64> = (0..k)
         .map(|j| (x0[j] + delta[j]).clamp(bounds[j].0, bounds[j].1))
         .collect();
     let d = nalgebra::DVector::from_iterator(k, (0..k).map(|j| x1[j] - x0[j]));
-    let predicted = nalgebra::DVector::from_column_slice(&r0) + &jac * d;
+    // The step's residual with the calibration re-adjusted, less what the calibration
+    // re-adjusted alone would remove.
+    let predicted = readjusted(&r0v + &jac * d) - (readjusted(r0v.clone()) - &r0v);
     let cost1 = 0.5 * predicted.iter().map(|v| v * v).sum::<f64>();
     Some(if cost1 < cost0 {
         (cost1, x1, predicted.as_slice().to_vec())
