@@ -8,7 +8,7 @@ use super::edit::ident;
 use super::menu::{law_value, place};
 use super::scales::Scales;
 use super::tag::Tag;
-use crate::element::{ElementKind, Law};
+use crate::element::{ElementKind, Law, Measured};
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
 
@@ -50,6 +50,7 @@ impl Node {
         match self.kind {
             NodeKind::Hydraulic if self.level => ("m", "m^3/s"),
             NodeKind::Hydraulic => ("Pa", "m^3/s"),
+            NodeKind::Thermal if self.celsius => ("degC", "W"),
             NodeKind::Thermal => ("K", "W"),
             NodeKind::Electrical => ("V", "A"),
             NodeKind::Generic => ("e", "f"),
@@ -127,6 +128,9 @@ pub struct Node {
     pub units_known: bool,
     /// The C that stores at the node.
     pub storage: ElementId,
+    /// A thermal node whose temperature is in degrees Celsius (its C in J/degC, or an
+    /// output reading its effort in degC): an absolute temperature is not in K.
+    pub celsius: bool,
 }
 
 impl Node {
@@ -160,6 +164,11 @@ impl Node {
         let compact: String = unit.chars().filter(|c| !c.is_whitespace()).collect();
         let level = matches!(compact.as_str(), "m^2" | "m²");
         let of_unit = NodeKind::of_unit(&unit);
+        let is_celsius = |u: &str| matches!(u.trim(), "degC" | "°C" | "C°" | "Celsius");
+        let name = &g.element(id).name;
+        let celsius = compact.ends_with("degC")
+            || (g.outputs().iter())
+                .any(|o| o.measured == Measured::Effort(name.clone()) && is_celsius(&o.unit));
         if let Some(d) = g.element(id).domain {
             use crate::element::PhysicalDomain as D;
             let kind = match d {
@@ -174,6 +183,7 @@ impl Node {
                 level: level && kind == NodeKind::Hydraulic,
                 units_known: of_unit == kind,
                 storage: c,
+                celsius,
             });
         }
         Some(Node {
@@ -182,6 +192,7 @@ impl Node {
             level,
             units_known: true,
             storage: c,
+            celsius,
         })
     }
 
@@ -238,8 +249,7 @@ mod tests {
     /// J/K): its node is thermal, in K and W, and the menu says so in its units and words.
     #[test]
     fn a_capacity_written_out_in_the_law_gives_the_node_its_units() {
-        let g = read_model(
-            r#"
+        let src = r#"
 name = "block"
 [parameters]
 Cth = { value = 900.0, unit = "J/K", description = "heat capacity" }
@@ -275,9 +285,8 @@ to = "Convection"
 name = "T"
 value = "Mass.q / Cth"
 unit = "K"
-"#,
-        )
-        .unwrap();
+"#;
+        let g = read_model(src).unwrap();
         let id = g.find("block").unwrap();
         let node = Node::of(&g, id).unwrap();
         assert_eq!((node.kind, node.units_known), (NodeKind::Thermal, true));
@@ -296,5 +305,13 @@ unit = "K"
         let relief = menu.iter().find(|c| c.id.starts_with("overflow@")).unwrap();
         let units: Vec<&str> = relief.params.iter().map(|p| p.unit.as_str()).collect();
         assert_eq!(units, ["K", "W/K"]);
+        // Read in degrees Celsius, an absolute temperature is not in K.
+        let celsius = src.replace(
+            "value = \"Mass.q / Cth\"\nunit = \"K\"",
+            "effort = \"block\"\nunit = \"degC\"",
+        );
+        let g = read_model(&celsius).unwrap();
+        let node = Node::of(&g, g.find("block").unwrap()).unwrap();
+        assert_eq!(node.units(), ("degC", "W"));
     }
 }
