@@ -431,6 +431,9 @@ pub fn compare_prediction_with_spread(
             Some(f) => f * crate::residual::steady_state(&predicted).abs(),
             None => opts.band_sigmas * floor,
         };
+        if let Some(w) = start_offset(&name, &unit, &residual, band) {
+            floor_warnings.push(w);
+        }
         let windows = match spread.and_then(|s| s.get(&name)) {
             Some(s) if s.len() != residual.len() => {
                 return Err(CoreError::LengthMismatch {
@@ -469,6 +472,31 @@ pub fn compare_prediction_with_spread(
         warnings: (findings.into_iter().map(|f| f.message))
             .chain(floor_warnings)
             .collect(),
+    })
+}
+
+/// Samples at the start of a recording whose mean residual [`start_offset`] reads.
+const START_SAMPLES: usize = 5;
+
+/// The warning when output `name` starts far from the model: the mean of the residual's
+/// first [`START_SAMPLES`] samples beyond `band` and more than twice the residual's RMS (a
+/// recording that starts away from the model's initial state, whose error then decays; a
+/// fit or explain would otherwise take it for an effect).
+pub(crate) fn start_offset(name: &str, unit: &str, residual: &[f64], band: f64) -> Option<String> {
+    if residual.len() < 4 * START_SAMPLES {
+        return None;
+    }
+    let start = residual[..START_SAMPLES].iter().sum::<f64>() / START_SAMPLES as f64;
+    let rms = crate::residual::rms(residual);
+    (start.abs() > band && start.abs() > 2.0 * rms).then(|| {
+        format!(
+            "`{name}` starts {} {unit} from the model (its first {START_SAMPLES} samples' \
+             mean residual, {:.1} times its RMS over the record): the recording may not start \
+             where the model does — give the initial state (a bond graph's `[initial]`, with \
+             `free = true` for fit to find it) or start at the steady state (--steady-start)",
+            crate::story::num(start),
+            start.abs() / rms
+        )
     })
 }
 
@@ -529,6 +557,22 @@ pub fn compare(model: &dyn Model, rec: &Recording, opts: &CompareOptions) -> Res
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_start_away_from_the_model_is_said_and_a_model_error_throughout_is_not() {
+        // A first-order decay from 4 units off, then noise-like wiggles of 0.05.
+        let decay: Vec<f64> = (0..200)
+            .map(|k| 4.0 * (-f64::from(k) / 20.0).exp() + 0.05 * (f64::from(k) * 1.7).sin())
+            .collect();
+        let w = start_offset("T", "K", &decay, 0.2).unwrap();
+        assert!(w.starts_with("`T` starts 3."), "{w}");
+        // An error of the same size throughout (a wrong gain) is no start.
+        let throughout: Vec<f64> = (0..200).map(|k| 4.0 * (f64::from(k) * 0.1).sin()).collect();
+        assert_eq!(start_offset("T", "K", &throughout, 0.2), None);
+        // Within the band, nothing to say.
+        let small: Vec<f64> = decay.iter().map(|r| r * 0.01).collect();
+        assert_eq!(start_offset("T", "K", &small, 0.2), None);
+    }
 
     #[test]
     fn spread_widens_the_band_and_peaks_stay_the_residuals() {

@@ -14,7 +14,7 @@ use crate::report::{
     write_html,
 };
 
-fn num(v: f64) -> String {
+pub(crate) fn num(v: f64) -> String {
     format_number(v)
 }
 

@@ -856,6 +856,20 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
     let mut judge = Judge::new(&target, opts);
     let judged_before = judge.judge(&base_weighted);
     let floors_before = judge.floors.clone();
+    // A recording that starts away from the model's initial state: its decaying error would
+    // be taken for an effect (a heater's gain of 0.75 for a block started 4.6 °C off).
+    for (j, name) in target.names.iter().enumerate() {
+        let n = target.rec.len();
+        let residual: Vec<f64> = (base_weighted[j * n..(j + 1) * n].iter())
+            .map(|r| r * target.sigma[j])
+            .collect();
+        let band = 4.0 * target.sigma[j];
+        if let Some(w) =
+            crate::compare::start_offset(name, &target.model.unit(name), &residual, band)
+        {
+            warnings.push(w);
+        }
+    }
 
     // Fit every candidate, in parallel.
     let free: Vec<&str> = (target.calibration.iter())
