@@ -473,6 +473,32 @@ pub struct FailureWindow {
     pub sign: i8,
 }
 
+/// The share of the record `t` that failure windows (each from `start` to `end`, s) cover,
+/// in [0, 1]: how much of it a model leaves outside its band (a count of windows grows as a
+/// falling error wanders in and out).
+///
+/// ```
+/// # use modelgap_core::residual::share_outside;
+/// let t = [0.0, 1.0, 2.0, 3.0, 4.0];
+/// assert_eq!(share_outside([(1.0, 2.0), (3.0, 3.0)], &t), 0.25);
+/// assert_eq!(share_outside([], &t).to_string(), "0");
+/// ```
+pub fn share_outside(windows: impl IntoIterator<Item = (f64, f64)>, t: &[f64]) -> f64 {
+    let (Some(&t0), Some(&t1)) = (t.first(), t.last()) else {
+        return 0.0;
+    };
+    if t1 <= t0 {
+        return 0.0;
+    }
+    let covered: f64 = windows.into_iter().map(|(a, b)| (b - a).max(0.0)).sum();
+    if covered > 0.0 {
+        (covered / (t1 - t0)).min(1.0)
+    } else {
+        // An empty sum of floats is −0.
+        0.0
+    }
+}
+
 /// The `n` windows with the largest peaks, in time order: what a list of a few shows of
 /// many (a recording whose error grows after a quiet start would otherwise show the quiet
 /// part's noise excursions first).

@@ -136,8 +136,21 @@ pub fn verdict_sentence(ex: &Explanation) -> String {
     }
 }
 
+/// A share in [0, 1] as a percentage: `62 %`, `0.4 %`, `0 %`.
+pub(crate) fn percent(share: f64) -> String {
+    let p = 100.0 * share;
+    if p == 0.0 || p >= 10.0 {
+        format!("{p:.0} %")
+    } else {
+        format!("{p:.1} %")
+    }
+}
+
 /// The error before → after per output, as text.
 pub fn before_after_text(before: &Comparison, after: &Comparison) -> String {
+    let share = |w: &[crate::residual::FailureWindow], t: &[f64]| {
+        crate::residual::share_outside(w.iter().map(|w| (w.start, w.end)), t)
+    };
     let mut s = String::new();
     for o in &before.outputs {
         let Some(a) = after.output(&o.name) else {
@@ -154,7 +167,8 @@ pub fn before_after_text(before: &Comparison, after: &Comparison) -> String {
             String::from("was already 0")
         };
         s.push_str(&format!(
-            "  {:<8} RMS {} → {} {} ({change}; {:.1}× → {:.1}× the noise floor {}), failure windows {} → {}\n",
+            "  {:<8} RMS {} → {} {} ({change}; {:.1}× → {:.1}× the noise floor {}), outside \
+             its band {} → {} of the record\n",
             o.name,
             num(o.stats.rms),
             num(a.stats.rms),
@@ -162,8 +176,8 @@ pub fn before_after_text(before: &Comparison, after: &Comparison) -> String {
             o.rms_over_floor(),
             a.rms_over_floor(),
             num(o.noise_floor),
-            o.windows.len(),
-            a.windows.len(),
+            percent(share(&o.windows, &before.t)),
+            percent(share(&a.windows, &after.t)),
         ));
     }
     wrap_text(&s, TEXT_WIDTH)

@@ -730,6 +730,9 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
 /// The error before → after, over all markers and for the worst markers before.
 #[must_use]
 pub fn before_after_text(before: &ClothComparison, after: &ClothComparison) -> String {
+    let share = |w: &[ClothWindow], t: &[f64]| {
+        modelgap_core::residual::share_outside(w.iter().map(|w| (w.start, w.end)), t)
+    };
     let change = |b: f64, a: f64| {
         if b > 0.0 {
             let r = a / b;
@@ -743,15 +746,16 @@ pub fn before_after_text(before: &ClothComparison, after: &ClothComparison) -> S
         }
     };
     let mut s = format!(
-        "  marker RMS {} → {} ({}; {:.1}× → {:.1}× the noise floor {}), failure windows {} → {}\n",
+        "  marker RMS {} → {} ({}; {:.1}× → {:.1}× the noise floor {}), outside the band {:.0} % \
+         → {:.0} % of the record\n",
         mm3(before.rms),
         mm3(after.rms),
         change(before.rms, after.rms),
         before.rms_over_floor(),
         after.rms_over_floor(),
         mm3(before.noise_floor),
-        before.windows.len(),
-        after.windows.len()
+        100.0 * share(&before.windows, &before.t),
+        100.0 * share(&after.windows, &after.t),
     );
     let worst: Vec<String> = before
         .worst_markers(3)
