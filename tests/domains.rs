@@ -141,7 +141,12 @@ unit = "m"
 
 /// `TANKS` with one more element on `node`: an R with a flow law, bonded from the node.
 fn with_outflow(node: &str, name: &str, flow: &str) -> String {
-    TANKS.replacen(
+    with_outflow_in(TANKS, node, name, flow)
+}
+
+/// `model` with one more element on `node`: an R with a flow law, bonded from the node.
+fn with_outflow_in(model: &str, node: &str, name: &str, flow: &str) -> String {
+    model.replacen(
         "[[outputs]]",
         &format!(
             "[[elements]]\nname = \"{name}\"\nkind = \"R\"\nflow = \"{flow}\"\n\n[[bonds]]\nfrom = \"{node}\"\nto = \"{name}\"\n\n[[outputs]]"
@@ -358,10 +363,7 @@ unit = "K"
 fn hidden_convection_is_named_a_power_law_of_the_plates_temperature() {
     // Natural convection: heat flow ∝ ΔT^1.25 (the menu's heat loss to ambient is linear in
     // ΔT; its power-law heat loss has the exponent free).
-    let truth = ROOM.replace(
-        "[[outputs]]",
-        "[[elements]]\nname = \"air\"\nkind = \"R\"\nflow = \"0.4 * max(e, 0)^1.25\"\n\n[[bonds]]\nfrom = \"plate\"\nto = \"air\"\n\n[[outputs]]",
-    );
+    let truth = with_outflow_in(ROOM, "plate", "air", "0.4 * max(e, 0)^1.25");
     let rec = record(
         &truth,
         "P",
@@ -650,10 +652,11 @@ fn hidden_radiation_is_named_a_power_loss_of_the_blocks_temperature() {
     // a law of the absolute temperature, not of the rise: over a rise of 90 K it is a
     // convex loss (42 W at the top) that the calibrated convection half absorbs. The
     // screen sees it only with the calibration re-adjusted beside it.
-    let truth = BLOCK.replacen(
-        "[[outputs]]",
-        "[[elements]]\nname = \"radiation\"\nkind = \"R\"\nflow = \"3.06e-9 * ((e + 293.15)^4 - 293.15^4)\"\n\n[[bonds]]\nfrom = \"block\"\nto = \"radiation\"\n\n[[outputs]]",
-        1,
+    let truth = with_outflow_in(
+        BLOCK,
+        "block",
+        "radiation",
+        "3.06e-9 * ((e + 293.15)^4 - 293.15^4)",
     );
     let rec = record(
         &truth,
