@@ -309,10 +309,11 @@ fn windows_text(windows: &[FailureWindow], unit: &str, with_band: bool) -> Strin
                 " {n} failure window{}: ",
                 if n == 1 { "" } else { "s" }
             );
+            // Each listed window by its number on the chart (windows in time order).
             let listed: Vec<String> = crate::residual::largest_windows(windows, MAX_LISTED_WINDOWS)
                 .into_iter()
-                .enumerate()
-                .map(|(k, w)| {
+                .map(|w| {
+                    let k = windows.iter().position(|x| std::ptr::eq(x, w)).unwrap_or(0);
                     let side = match w.sign {
                         1 => ", measured above the model",
                         -1 => ", measured below the model",
