@@ -360,3 +360,31 @@ fn residual_caption(p: &ResidualPlot) -> String {
     }
     text
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Of many windows the caption lists the largest, each by its number on the chart.
+    #[test]
+    fn listed_windows_keep_their_chart_numbers() {
+        let windows: Vec<FailureWindow> = (0..8)
+            .map(|k| FailureWindow {
+                start: f64::from(k),
+                end: f64::from(k) + 0.5,
+                peak: if k == 6 {
+                    9.0
+                } else {
+                    1.0 + 0.1 * f64::from(k)
+                },
+                peak_time: f64::from(k) + 0.2,
+                sign: 1,
+            })
+            .collect();
+        let text = windows_text(&windows, "V", true);
+        // The smallest two (windows 1 and 2) are left out; window 7's peak is named as 7th.
+        assert!(!text.contains("(1)") && !text.contains("(2)"), "{text}");
+        assert!(text.contains("(7) 6–6.5 s, peak 9 V"), "{text}");
+        assert!(text.contains("and 2 with smaller peaks"), "{text}");
+    }
+}
