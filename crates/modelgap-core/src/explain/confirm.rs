@@ -383,25 +383,22 @@ pub(super) fn linearised_step(
     };
     let r0v = nalgebra::DVector::from_column_slice(&r0);
     let cal_jac = nalgebra::DMatrix::from_fn(m, cal.len(), |i, j| cal[j][i]);
-    // The calibration's least-squares move for a residual `r`, and the residual after it.
+    let cal_normal = (cal_jac.transpose() * &cal_jac).lu();
+    // The residual `r` after the calibration's least-squares move.
     let readjusted = |r: nalgebra::DVector<f64>| -> nalgebra::DVector<f64> {
         if cal.is_empty() {
             return r;
         }
-        let jt = cal_jac.transpose();
-        match (&jt * &cal_jac).lu().solve(&(-(&jt * &r))) {
+        match cal_normal.solve(&(-(cal_jac.transpose() * &r))) {
             Some(d) => r + &cal_jac * d,
             None => r,
         }
     };
-    let full_jac = if cal.is_empty() {
-        jac.clone()
-    } else {
-        let mut full = nalgebra::DMatrix::zeros(m, k + cal.len());
-        full.columns_mut(0, k).copy_from(&jac);
-        full.columns_mut(k, cal.len()).copy_from(&cal_jac);
-        full
-    };
+    // The candidate's columns, then the calibration's.
+    let mut full_jac = jac.clone().resize_horizontally(k + cal.len(), 0.0);
+    if !cal.is_empty() {
+        full_jac.columns_mut(k, cal.len()).copy_from(&cal_jac);
+    }
     let jt_j = full_jac.transpose() * &full_jac;
     let jt_r = full_jac.transpose() * &r0v;
     let delta = jt_j

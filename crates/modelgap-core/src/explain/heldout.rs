@@ -112,6 +112,22 @@ fn inside(t: f64, rec: &Recording) -> bool {
     t > t0 + margin && t < t1 - margin
 }
 
+/// The held-out error of the model without and with `effect` (a candidate at its
+/// values, last of `with`): an event inside the record on the two halves of what
+/// follows it ([`held_out_after`]), anything else on the record's halves
+/// ([`held_out`]). `None` when a simulation fails.
+pub(super) fn held_out_effect(
+    target: &Target,
+    without: &[(&Candidate, &[f64])],
+    with: &[(&Candidate, &[f64])],
+    effect: (&Candidate, &[f64]),
+) -> Option<HeldOut> {
+    match event_time(effect.0, effect.1, target.rec) {
+        Some(t) => held_out_after(target, without, with, t),
+        None => held_out(target, without, with),
+    }
+}
+
 /// The held-out error of the model without and with an effect: `without`
 /// and `with` are the effects built in (each with its values from a fit on
 /// the whole recording). `None` when a simulation fails.

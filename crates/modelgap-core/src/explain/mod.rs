@@ -1371,10 +1371,12 @@ fn first_held_out(
         .collect();
     let with: Vec<(&Candidate, &[f64])> = with.iter().map(|(c, v)| (c, v.as_slice())).collect();
     // An event inside the record is held out on the two halves of what follows it.
-    let check = match heldout::event_time(&first.candidate, &first.values, target.rec) {
-        Some(t) => heldout::held_out_after(target, &without, &with, t),
-        None => heldout::held_out(target, &without, &with),
-    };
+    let check = heldout::held_out_effect(
+        target,
+        &without,
+        &with,
+        (&first.candidate, first.values.as_slice()),
+    );
     match check {
         Some(h) if h.lowers() => (None, Some(h)),
         Some(h) => (
@@ -1425,14 +1427,18 @@ fn pair_first_held_out(
     }
     let (without, with_view) = (view(&without), view(&with));
     let effect = first.effect();
-    let check = match heldout::event_time(&effect.candidate, &effect.values, target.rec) {
-        Some(t) => heldout::held_out_after(target, &without, &with_view, t),
-        None => heldout::held_out(target, &without, &with_view),
-    };
+    let check = heldout::held_out_effect(
+        target,
+        &without,
+        &with_view,
+        (&effect.candidate, effect.values.as_slice()),
+    );
     match check {
         Some(h) if h.lowers() => None,
         Some(h) => Some(format!(
-            "{} ({}) beside {} lowers the error of the whole recording but not the held-out              error below {} alone (fitted on one half, measured on the other: {}): it does not              hold throughout",
+            "{} ({}) beside {} lowers the error of the whole recording but not the held-out \
+             error below {} alone (fitted on one half, measured on the other: {}): it does not \
+             hold throughout",
             first.candidate.id,
             first.candidate.name,
             second.candidate.id,
@@ -1947,8 +1953,6 @@ fn fit_options_for(model: &dyn Model, opts: &ExplainOptions, scales: &[f64]) -> 
     fit
 }
 
-/// The screen's finite-difference step as a fraction of a parameter's scale:
-/// [`GRID_FD_STEP`], or the model's own when larger ([`Model::fd_step`]).
 /// The calibration's columns of the Jacobian of `target`'s weighted residual at
 /// `nominal`, the model as calibrated: one finite difference per calibration
 /// parameter that is not at a bound (a step the screen's, away from the upper
@@ -1985,6 +1989,8 @@ fn calibration_columns(target: &Target, nominal: &[f64]) -> Vec<Vec<f64>> {
         .collect()
 }
 
+/// The screen's finite-difference step as a fraction of a parameter's scale:
+/// [`GRID_FD_STEP`], or the model's own when larger ([`Model::fd_step`]).
 fn screen_fd_step(model: &dyn Model) -> f64 {
     model
         .fd_step()

@@ -220,10 +220,12 @@ pub(super) fn second_effect(
             (&second.candidate, second.values.as_slice()),
         ];
         // An event inside the record is held out on the two halves of what follows it.
-        let check = match heldout::event_time(&second.candidate, &second.values, target.rec) {
-            Some(t) => heldout::held_out_after(target, &single, &pair, t),
-            None => heldout::held_out(target, &single, &pair),
-        };
+        let check = heldout::held_out_effect(
+            target,
+            &single,
+            &pair,
+            (&second.candidate, second.values.as_slice()),
+        );
         match check {
             Some(h) if h.lowers() => h,
             Some(h) => {
