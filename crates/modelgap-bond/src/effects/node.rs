@@ -313,5 +313,12 @@ unit = "K"
         let g = read_model(&celsius).unwrap();
         let node = Node::of(&g, g.find("block").unwrap()).unwrap();
         assert_eq!(node.units(), ("degC", "W"));
+        // The power loss is refused where it does not belong, and with a bad value, naming it.
+        let power = menu.iter().find(|c| c.id == "power@block").unwrap();
+        let err = crate::effects::apply(&g, power, &[f64::NAN, 2.0]).unwrap_err();
+        assert!(err.to_string().contains("power@block"), "{err}");
+        let tank = read_model(&src.replace("\"thermal\"", "\"hydraulic\"")).unwrap();
+        let err = crate::effects::apply(&tank, power, &[1e-3, 2.0]).unwrap_err();
+        assert!(err.to_string().contains("not a thermal node"), "{err}");
     }
 }
