@@ -61,8 +61,9 @@ pub fn wrap_text(text: &str, width: usize) -> String {
         let mut current_len = current.chars().count();
         for word in words {
             let len = word.chars().count();
-            // Empty words are runs of spaces (alignment): kept, never a place to break.
-            if word.is_empty() || current_len + 1 + len <= width {
+            // Empty words are runs of spaces (alignment): kept, never a place to break; nor
+            // before a percent sign, which belongs to its number.
+            if word.is_empty() || word.starts_with('%') || current_len + 1 + len <= width {
                 current.push(' ');
                 current.push_str(word);
                 current_len += 1 + len;
@@ -930,6 +931,8 @@ mod tests {
         assert!(wrapped.contains("\n    short line   with  alignment\n"));
         assert!(wrapped.lines().nth(1).unwrap().starts_with("      word"));
         assert_eq!(wrap_text("a b c\n", 4), "a b\n  c\n");
+        // A number keeps its percent sign.
+        assert_eq!(wrap_text("ab 12 %\n", 5), "ab 12 %\n");
     }
 
     // Issue 16: fits that ended on a bound (beta = 5e-5 at 5× nominal) showed no ± and no
