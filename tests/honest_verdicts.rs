@@ -29,9 +29,11 @@ fn story(ex: &Explanation) -> String {
 #[test]
 fn a_lagging_quantised_speed_sensor_is_never_nothing_missing() {
     // A 6 s run, the sensors lagging 3 ms and quantised at 0.4 % of full scale
-    // (about 1 rad/s and 0.1 A): the speed sensor's lag is on the menu (`lag@omega`), and
-    // named; what it leaves — the current sensor's lag under its quantisation — is named
-    // too, never called noise.
+    // (about 1 rad/s and 0.1 A). The motor is linear and both sensors lag alike, so one lag
+    // of the driver (`actuator-lag@V`) predicts exactly what the two sensors' lags do, with
+    // one parameter: it is named (before the driver's lag was on the menu, the speed
+    // sensor's lag was, leaving the current's); what is left under the quantisation is
+    // named too, never called noise.
     let rec = record(
         &case("nothing"),
         &RecordingOptions {
@@ -49,7 +51,7 @@ fn a_lagging_quantised_speed_sensor_is_never_nothing_missing() {
         story(&ex)
     );
     let first = ex.chosen.first().expect("the lag is chosen");
-    assert_eq!(first.candidate.id, "lag@omega", "{}", story(&ex));
+    assert_eq!(first.candidate.id, "actuator-lag@V", "{}", story(&ex));
     let tau = first.params[0].value;
     assert!((2e-3..4e-3).contains(&tau), "tau = {tau}\n{}", story(&ex));
     assert!(

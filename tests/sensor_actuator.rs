@@ -51,6 +51,41 @@ fn recording(truth: &str, sensor: impl Fn(&[f64]) -> Vec<f64>) -> Recording {
     .unwrap()
 }
 
+/// [`recording`]'s motor and drive, but the armature gets the commanded voltage through
+/// `driver` (given the command on a 20 kHz grid, it returns what is delivered there): the
+/// recording holds the command, as a controller logs it.
+fn driven_recording(driver: impl Fn(&[f64]) -> Vec<f64>) -> Recording {
+    let g = read_model(MOTOR).unwrap();
+    let command = |t: f64| [6.0, 12.0, -12.0, -4.0, 9.0, 0.0, 3.0, -8.0][(t / 0.5) as usize % 8];
+    let fine: Vec<f64> = (0..80_000).map(|k| k as f64 * 5e-5).collect();
+    let delivered = driver(&fine.iter().map(|&t| command(t)).collect::<Vec<_>>());
+    let inputs = Inputs::new().with(
+        "V",
+        Drive::Sampled {
+            t: fine,
+            values: delivered,
+            hold: Hold::Linear,
+        },
+    );
+    let t: Vec<f64> = (0..4000).map(|k| k as f64 * 1e-3).collect();
+    let run = simulate(&g, &inputs, &t, &SimOptions::default()).unwrap();
+    let mut gauss = Gaussian::new(23);
+    let mut noisy =
+        |y: &[f64], s: f64| -> Vec<f64> { y.iter().map(|x| x + s * gauss.sample()).collect() };
+    let i = noisy(run.output("i").unwrap(), 0.01);
+    let omega = noisy(run.output("omega").unwrap(), 0.2);
+    let v = t.iter().map(|&t| command(t)).collect();
+    Recording::new(
+        t,
+        vec![
+            Signal::new("V", v),
+            Signal::new("i", i),
+            Signal::new("omega", omega),
+        ],
+    )
+    .unwrap()
+}
+
 fn explained(rec: &Recording) -> Explanation {
     let model = BondModel::new(library::dc_motor());
     explain(&model, rec, &ExplainOptions::default()).unwrap()
@@ -169,4 +204,44 @@ fn chain_effects_on_places_the_model_lacks_are_refused() {
             .to_string();
         assert!(message.contains(says), "{target}: {message}");
     }
+}
+
+/// A motor driver whose output follows its command through two stages (a current loop of
+/// 4 ms behind a 1.5 ms input filter: not the candidate's single lag) is named a lag of
+/// the actuator, which shows in the current as in the speed, not a lag of the speed's
+/// sensor, which would leave the current as the model has it.
+#[test]
+fn a_driver_that_follows_its_command_late_is_named_a_lag_of_the_actuator() {
+    let two_stages = |v: &[f64]| {
+        let h = 5e-5_f64;
+        let (a1, a2) = ((-h / 1.5e-3).exp(), (-h / 4e-3).exp());
+        let (mut s1, mut s2) = (0.0, 0.0);
+        v.iter()
+            .map(|&x| {
+                s1 = a1 * s1 + (1.0 - a1) * x;
+                s2 = a2 * s2 + (1.0 - a2) * s1;
+                s2
+            })
+            .collect()
+    };
+    let ex = explained(&driven_recording(two_stages));
+    let text = modelgap::story::explanation_text(&ex, 6);
+    println!("{text}");
+    let best = ex.chosen.first().expect("an effect is chosen");
+    assert_eq!(best.candidate.id, "actuator-lag@V", "{text}");
+    // The current starts off the model because of the lag: no warning about the start.
+    assert!(
+        ex.warnings.iter().all(|w| !w.contains("starts")),
+        "{:?}",
+        ex.warnings
+    );
+    let tau = best.params[0].value;
+    // A single lag standing for the two: about their sum.
+    assert!((4e-3..7e-3).contains(&tau), "tau = {tau}\n{text}");
+    assert!(
+        ex.ranked
+            .iter()
+            .all(|r| r.candidate.id != "lag@omega" || r.score < best.score),
+        "{text}"
+    );
 }

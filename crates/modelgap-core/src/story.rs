@@ -109,14 +109,16 @@ pub fn verdict_sentence(ex: &Explanation) -> String {
         }
         Verdict::EffectFound => format!("Missing: {}.", names(0)),
         Verdict::TwoEffects => format!("Missing: {}, and {}.", names(0), names(1)),
-        Verdict::Partial => format!(
-            "Partly explained: {} removes part of the error, but what remains is not noise — the true effect is probably not on the menu.",
-            if ex.chosen.is_empty() {
-                "no candidate".to_string()
-            } else {
-                names(0)
-            }
-        ),
+        Verdict::Partial => {
+            let (which, verb) = match ex.chosen.len() {
+                0 => ("no candidate".to_string(), "removes"),
+                1 => (names(0), "removes"),
+                _ => (format!("{}, with {},", names(0), names(1)), "remove"),
+            };
+            format!(
+                "Partly explained: {which} {verb} part of the error, but what remains is not noise — the true effect is probably not on the menu."
+            )
+        }
         Verdict::Unexplained => {
             "Not explained: the model fails, and no candidate effect on the menu \
              explains any of it significantly."

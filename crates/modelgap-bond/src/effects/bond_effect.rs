@@ -8,10 +8,10 @@ use super::edit::bad;
 use super::scales::Scales;
 use super::tag::Tag;
 use super::{
-    ActuatorGain, ActuatorLimit, Backlash, Brush, Calibration, Cogging, Coulomb, Coupling,
-    DeadZone, Declared, Deviation, Factor, Fault, Faulted, Heating, Inertia, Inflow, Junction,
-    LawEffect, Leak, Load, Node, Orifice, Overflow, PowerLoss, Saturation, SensorClip, SensorDelay,
-    SensorLag, SensorOffset, SensorScale, Stiffness, Store, Viscous,
+    ActuatorDelay, ActuatorGain, ActuatorLag, ActuatorLimit, Backlash, Brush, Calibration, Cogging,
+    Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault, Faulted, Heating, Inertia,
+    Inflow, Junction, LawEffect, Leak, Load, Node, Orifice, Overflow, PowerLoss, Saturation,
+    SensorClip, SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness, Store, Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::BondGraph;
@@ -66,6 +66,10 @@ pub enum BondEffect {
     Gain(ActuatorGain),
     /// `limit@<source>`: a driven source that saturates.
     Limit(ActuatorLimit),
+    /// `actuator-lag@<source>`: a driven source follows its command through a lag.
+    ActuatorLag(ActuatorLag),
+    /// `actuator-delay@<source>`: a driven source follows its command a delay behind.
+    ActuatorDelay(ActuatorDelay),
     /// `lag@<output>`: a first-order lag in an output's sensor.
     Lag(SensorLag),
     /// `offset@<output>`: a constant offset in an output's sensor.
@@ -115,6 +119,8 @@ from_kind!(
     Orifice,
     Store,
     DeadZone,
+    ActuatorLag,
+    ActuatorDelay,
     Declared,
     Calibration
 );
@@ -315,6 +321,28 @@ impl BondEffect {
                 })?;
                 Some(BondEffect::Limit(k))
             }
+            Tag::ActuatorLag => {
+                let k = g.find(target).and_then(|id| ActuatorLag::at(g, id));
+                let k = k.ok_or_else(|| {
+                    bad(
+                        c,
+                        "",
+                        format!("the model has no source '{target}' driven by an input"),
+                    )
+                })?;
+                Some(BondEffect::ActuatorLag(k))
+            }
+            Tag::ActuatorDelay => {
+                let k = g.find(target).and_then(|id| ActuatorDelay::at(g, id));
+                let k = k.ok_or_else(|| {
+                    bad(
+                        c,
+                        "",
+                        format!("the model has no source '{target}' driven by an input"),
+                    )
+                })?;
+                Some(BondEffect::ActuatorDelay(k))
+            }
             Tag::Lag => {
                 let l = SensorLag::named(g, target).ok_or_else(|| {
                     bad(
@@ -422,6 +450,8 @@ impl BondEffect {
             BondEffect::DeadZone(k) => k,
             BondEffect::Gain(k) => k,
             BondEffect::Limit(k) => k,
+            BondEffect::ActuatorLag(k) => k,
+            BondEffect::ActuatorDelay(k) => k,
             BondEffect::Lag(k) => k,
             BondEffect::Offset(k) => k,
             BondEffect::Clip(k) => k,
@@ -460,6 +490,8 @@ impl BondEffect {
             | BondEffect::DeadZone(_)
             | BondEffect::Gain(_)
             | BondEffect::Limit(_)
+            | BondEffect::ActuatorLag(_)
+            | BondEffect::ActuatorDelay(_)
             | BondEffect::Lag(_)
             | BondEffect::Offset(_)
             | BondEffect::Clip(_)
@@ -525,6 +557,8 @@ impl BondEffect {
             Tag::DeadZone => DeadZone::vanishing_values(c),
             Tag::Gain => ActuatorGain::vanishing_values(c),
             Tag::Limit => ActuatorLimit::vanishing_values(c),
+            Tag::ActuatorLag => ActuatorLag::vanishing_values(c),
+            Tag::ActuatorDelay => ActuatorDelay::vanishing_values(c),
             Tag::Lag => SensorLag::vanishing_values(c),
             Tag::Offset => SensorOffset::vanishing_values(c),
             Tag::Clip => SensorClip::vanishing_values(c),

@@ -117,6 +117,15 @@ impl EffectDef for SensorLag {
     }
 }
 
+/// Which end of the plant a lag stage sits at: it names the stage's elements.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Stage {
+    /// In front of an output: what its sensor reads.
+    Sensor,
+    /// Behind a driven source: what its actuator delivers.
+    Actuator,
+}
+
 /// Adds the signal elements of a first-order lag of time constant `tau`
 /// following `signal` (see the module docs), for the sensor of output `name`;
 /// returns the name of the 0-junction whose effort is the lagged signal.
@@ -127,29 +136,60 @@ pub(super) fn lag_stage(
     signal: Expr,
     tau: Expr,
 ) -> Result<String> {
+    lag_stage_at(g, c, Stage::Sensor, name, signal, tau)
+}
+
+/// [`lag_stage`] for a sensor or an actuator (`name`: the output, or the source).
+pub(super) fn lag_stage_at(
+    g: &mut BondGraph,
+    c: &Candidate,
+    stage: Stage,
+    name: &str,
+    signal: Expr,
+    tau: Expr,
+) -> Result<String> {
     let suffix = ident(name);
-    let node = g.add(
-        Element::zero(&format!("sensor_{suffix}"))
-            .described(&format!("the sensor of {name}: its reading")),
-    )?;
-    let mut source = Element::sf(&format!("sensed_{suffix}"), "0")
-        .described(&format!("what the sensor of {name} follows"));
+    let (role, node_name, source_name, store_name, leak_name) = match stage {
+        Stage::Sensor => (
+            "sensor",
+            format!("sensor_{suffix}"),
+            format!("sensed_{suffix}"),
+            format!("lag_{suffix}"),
+            format!("relax_{suffix}"),
+        ),
+        Stage::Actuator => (
+            "actuator",
+            format!("actuator_{suffix}"),
+            format!("commanded_{suffix}"),
+            format!("actuator_lag_{suffix}"),
+            format!("actuator_relax_{suffix}"),
+        ),
+    };
+    let (node_text, source_text) = match stage {
+        Stage::Sensor => (
+            format!("the sensor of {name}: its reading"),
+            format!("what the sensor of {name} follows"),
+        ),
+        Stage::Actuator => (
+            format!("the actuator of {name}: what it delivers"),
+            format!("what the actuator of {name} is commanded"),
+        ),
+    };
+    let store_text = format!("the {role}'s lag");
+    let leak_text = format!("the {role} relaxing to what it follows");
+    let node = g.add(Element::zero(&node_name).described(&node_text))?;
+    let mut source = Element::sf(&source_name, "0").described(&source_text);
     source.law = Law::Source(signal);
     let source = g.add(source)?;
     g.bond(source, node)?;
-    let mut store = Element::c(&format!("lag_{suffix}"), "1");
+    let mut store = Element::c(&store_name, "1");
     store.law = Law::Linear(tau);
-    store.description = "the sensor's lag".to_string();
+    store.description = store_text;
     let store = g.add(store)?;
     g.bond(node, store)?;
     let leak = g.add(
-        Element::nonlinear(
-            &format!("relax_{suffix}"),
-            ElementKind::R,
-            None,
-            Some(law(c, "e")?),
-        )
-        .described("the sensor relaxing to what it follows"),
+        Element::nonlinear(&leak_name, ElementKind::R, None, Some(law(c, "e")?))
+            .described(&leak_text),
     )?;
     g.bond(node, leak)?;
     Ok(g.element(node).name.clone())

@@ -7,10 +7,10 @@ use super::bond_effect::BondEffect;
 use super::def::EffectDef;
 use super::scales::Scales;
 use super::{
-    ActuatorGain, ActuatorLimit, Backlash, Brush, Cogging, Coulomb, Coupling, DeadZone, Declared,
-    Deviation, Factor, Fault, Heating, Inertia, Inflow, Leak, Load, Orifice, Overflow, PowerLoss,
-    Saturation, SensorClip, SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness, Store,
-    Viscous,
+    ActuatorDelay, ActuatorGain, ActuatorLag, ActuatorLimit, Backlash, Brush, Cogging, Coulomb,
+    Coupling, DeadZone, Declared, Deviation, Factor, Fault, Heating, Inertia, Inflow, Leak, Load,
+    Orifice, Overflow, PowerLoss, Saturation, SensorClip, SensorDelay, SensorLag, SensorOffset,
+    SensorScale, Stiffness, Store, Viscous,
 };
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
@@ -57,7 +57,11 @@ use crate::graph::{BondGraph, ElementId};
 ///   `δ` from 0 to the largest value the source imposed), and `gain@<source>`
 ///   (the value becomes `k v`, `k` in [0.2, 2]) and `limit@<source>` (the
 ///   value becomes `sign(v) min(|v|, v_max)`, `v_max` from a twentieth of the
-///   largest value the source imposed to that value, eight grid starts).
+///   largest value the source imposed to that value, eight grid starts),
+///   `actuator-lag@<source>` (the source follows its command through a
+///   first-order lag `τ`, bounded as a sensor's lag; one state) and
+///   `actuator-delay@<source>` (a delay `d` behind, bounded as a sensor's
+///   delay; a first-order Padé all-pass, one state).
 /// - On each output: `lag@<output>` (a first-order lag `τ` in its sensor, from
 ///   a tenth of the sample interval to a fifth of the recording; one state),
 ///   `offset@<output>` (a constant `b` added to its reading, within ± the
@@ -153,6 +157,8 @@ pub fn offered(g: &BondGraph) -> Vec<BondEffect> {
     out.extend(of::<DeadZone>(g));
     out.extend(of::<ActuatorGain>(g));
     out.extend(of::<ActuatorLimit>(g));
+    out.extend(of::<ActuatorLag>(g));
+    out.extend(of::<ActuatorDelay>(g));
     out.extend(of::<SensorLag>(g));
     out.extend(of::<SensorOffset>(g));
     out.extend(of::<SensorClip>(g));

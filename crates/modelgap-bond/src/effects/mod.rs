@@ -65,7 +65,9 @@
 //!   convection, radiation);
 //! - on a source an input drives, in any domain: [`deadzone`](DeadZone),
 //!   [`gain`](ActuatorGain) (the actuator delivers `k` times its command) and
-//!   [`limit`](ActuatorLimit) (it saturates at `±v_max`);
+//!   [`limit`](ActuatorLimit) (it saturates at `±v_max`),
+//!   [`actuator-lag`](ActuatorLag) (it follows its command through a first-order
+//!   lag) and [`actuator-delay`](ActuatorDelay) (a delay behind);
 //! - on every output: [`lag`](SensorLag) (a first-order lag in its sensor) and
 //!   [`offset`](SensorOffset) (a constant added to its reading),
 //!   [`clip`](SensorClip) (it reads nothing beyond `[lower, upper]`) and
@@ -83,6 +85,7 @@
 //! edits share: fresh names, new parameters, attached one-ports) and
 //! `scales` ([`Scales`]: the model's own scales).
 
+mod actuator;
 mod backlash;
 mod bond_effect;
 mod brush;
@@ -130,6 +133,7 @@ use crate::error::Result;
 use crate::graph::BondGraph;
 use crate::simulate::ParamChange;
 
+pub use actuator::{ActuatorDelay, ActuatorLag};
 pub use backlash::Backlash;
 pub use bond_effect::{BondEffect, needs_adaptive_steps};
 pub use brush::Brush;

@@ -29,6 +29,8 @@ pub(super) enum Tag {
     DeadZone,
     Gain,
     Limit,
+    ActuatorLag,
+    ActuatorDelay,
     Lag,
     Offset,
     Clip,
@@ -40,7 +42,7 @@ pub(super) enum Tag {
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 30] = [
+const PREFIXES: [(Tag, &str); 32] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -63,6 +65,8 @@ const PREFIXES: [(Tag, &str); 30] = [
     (Tag::DeadZone, "deadzone@"),
     (Tag::Gain, "gain@"),
     (Tag::Limit, "limit@"),
+    (Tag::ActuatorLag, "actuator-lag@"),
+    (Tag::ActuatorDelay, "actuator-delay@"),
     (Tag::Lag, "lag@"),
     (Tag::Offset, "offset@"),
     (Tag::Clip, "clip@"),

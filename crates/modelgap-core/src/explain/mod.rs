@@ -857,17 +857,27 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
     let judged_before = judge.judge(&base_weighted);
     let floors_before = judge.floors.clone();
     // A recording that starts away from the model's initial state: its decaying error would
-    // be taken for an effect (a heater's gain of 0.75 for a block started 4.6 °C off).
-    for (j, name) in target.names.iter().enumerate() {
+    // be taken for an effect (a heater's gain of 0.75 for a block started 4.6 °C off). Said
+    // unless the effect chosen starts where the recording does (a driver that follows its
+    // command late: the current's first samples are off because of it).
+    let start_off = |j: usize, weighted: &[f64]| {
         let n = target.rec.len();
-        let residual: Vec<f64> = (base_weighted[j * n..(j + 1) * n].iter())
+        let residual: Vec<f64> = (weighted[j * n..(j + 1) * n].iter())
             .map(|r| r * target.sigma[j])
             .collect();
-        let band = 4.0 * target.sigma[j];
-        if let Some(w) =
-            crate::compare::start_offset(name, &target.model.unit(name), &residual, band)
-        {
-            warnings.push(w);
+        let name = &target.names[j];
+        crate::compare::start_offset(
+            name,
+            &target.model.unit(name),
+            &residual,
+            4.0 * target.sigma[j],
+        )
+    };
+    let mut start_warnings: Vec<(usize, String)> = Vec::new();
+    for j in 0..target.names.len() {
+        if let Some(w) = start_off(j, &base_weighted) {
+            warnings.push(w.clone());
+            start_warnings.push((j, w));
         }
     }
 
@@ -1329,6 +1339,13 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         if let Some(check) = model.qualitative_check(rec, &r.candidate) {
             r.qualitative = Some(check.agrees);
             r.qualitative_reason = check.reason;
+        }
+    }
+    if !chosen.is_empty() {
+        for (j, w) in &start_warnings {
+            if start_off(*j, &after_weighted).is_none() {
+                warnings.retain(|x| x != w);
+            }
         }
     }
     let outputs = summary(&after_weighted, judged_after, &judge.floors);
