@@ -714,6 +714,15 @@ impl PyOutputSummary {
     fn noise_sigma(&self) -> Option<f64> {
         self.inner.judgement.as_ref().map(|j| j.noise_sigma)
     }
+    /// The AR(1) coefficient of the noise model the scores whiten this output's residual with;
+    /// at its cap of 0.999 the residual is mostly model error. ``None`` when nothing was scored.
+    #[getter]
+    fn noise_rho(&self) -> Option<f64> {
+        self.inner
+            .noise_rho
+            .is_finite()
+            .then_some(self.inner.noise_rho)
+    }
     /// Why the residual is not what noise leaves (empty when it is, or when not judged).
     #[getter]
     fn reasons(&self) -> Vec<String> {

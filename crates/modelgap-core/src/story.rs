@@ -271,14 +271,49 @@ pub fn comparison_text(c: &Comparison) -> String {
     wrap_text(&s, TEXT_WIDTH)
 }
 
+/// What the scores are taken over, in words: a BIC difference on the residual whitened with
+/// each output's AR(1) noise coefficient, and what a coefficient at its cap means.
+pub fn scoring_basis(ex: &Explanation) -> String {
+    let rhos: Vec<(&str, f64)> = (ex.outputs.iter())
+        .filter(|o| o.noise_rho.is_finite())
+        .map(|o| (o.name.as_str(), o.noise_rho))
+        .collect();
+    if rhos.is_empty() {
+        return format!(
+            "a BIC difference with {} effective samples",
+            num(ex.effective_samples)
+        );
+    }
+    let list = if rhos.len() <= 3 {
+        (rhos.iter())
+            .map(|(n, r)| format!("{n} {r:.3}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    } else {
+        let lo = rhos.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
+        let hi = rhos.iter().map(|r| r.1).fold(f64::NEG_INFINITY, f64::max);
+        format!("{lo:.3}–{hi:.3} over {} outputs", rhos.len())
+    };
+    let capped = rhos.iter().any(|r| r.1 >= crate::explain::NOISE_RHO_CAP);
+    format!(
+        "a BIC difference on the residual whitened with the noise's AR(1) coefficient ({list}){}",
+        if capped {
+            "; at its cap of 0.999 the residual is mostly model error, and the scores weigh \
+             its changes from sample to sample"
+        } else {
+            ""
+        }
+    )
+}
+
 /// The ranking and the verdict as text.
 pub fn explanation_text(ex: &Explanation, top: usize) -> String {
     let mut s = String::new();
     if !ex.ranked.is_empty() {
         let _ = writeln!(
             s,
-            "candidate effects, best first (score = evidence, a BIC difference with {} effective samples):",
-            num(ex.effective_samples)
+            "candidate effects, best first (score = evidence: {}):",
+            scoring_basis(ex)
         );
     }
     for (i, r) in ex.ranked.iter().take(top).enumerate() {

@@ -590,6 +590,12 @@ class OutputSummary:
         noise), in the output's unit; ``None`` when not judged."""
 
     @property
+    def noise_rho(self) -> Optional[float]:
+        """The AR(1) coefficient of the noise model the scores whiten this output's residual
+        with; at its cap of 0.999 the residual is mostly model error, and the scores weigh its
+        changes from sample to sample. ``None`` when nothing was scored."""
+
+    @property
     def reasons(self) -> list[str]:
         """Why the residual is not what noise leaves (empty when it is, or when not judged)."""
 

@@ -647,8 +647,8 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
     if !ex.ranked.is_empty() {
         let _ = writeln!(
             s,
-            "candidate effects, best first (score = evidence, a BIC difference with {} effective samples):",
-            format_number(ex.effective_samples)
+            "candidate effects, best first (score = evidence: {}):",
+            modelgap_core::story::scoring_basis(ex)
         );
     }
     for (i, r) in ex.ranked.iter().take(top).enumerate() {

@@ -311,7 +311,20 @@ pub struct OutputSummary {
     /// when the recording cannot be judged).
     #[serde(default)]
     pub judgement: Option<Judgement>,
+    /// The AR(1) coefficient of the noise model the scores whiten this output's residual
+    /// with (read from the best fit's residual; [`NOISE_RHO_CAP`] when that residual is
+    /// mostly model error, and the scores then weigh its changes from sample to sample).
+    /// NaN when nothing was scored.
+    #[serde(default = "f64_nan")]
+    pub noise_rho: f64,
 }
+
+fn f64_nan() -> f64 {
+    f64::NAN
+}
+
+/// The largest AR(1) coefficient the noise model takes ([`noise_rho`]).
+pub const NOISE_RHO_CAP: f64 = 0.999;
 
 /// The result of [`explain`].
 #[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
@@ -573,7 +586,7 @@ pub fn noise_rho(r: &[f64]) -> f64 {
     // noise's wander. Two standard errors up keeps the loop from inventing
     // effects; white noise costs it a few percent of its samples.
     let se = 2.0 / (d.len() as f64).sqrt();
-    (1.0 + 2.0 * c1 / c0 + 2.0 * se).clamp(0.0, 0.999)
+    (1.0 + 2.0 * c1 / c0 + 2.0 * se).clamp(0.0, NOISE_RHO_CAP)
 }
 
 fn score(cost_before: f64, cost: f64, k: usize, n_eff: f64) -> f64 {
@@ -1066,7 +1079,14 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         ));
     }
     let summary = |after_weighted: &[f64], judged: Vec<Judgement>, floors: &[Floor]| {
-        output_summaries(&target, floors, &rms_before, after_weighted, judged)
+        output_summaries(
+            &target,
+            floors,
+            &rms_before,
+            after_weighted,
+            judged,
+            &white.rhos,
+        )
     };
     // An interrupted run: no verdict, nothing chosen, only finished fits ranked.
     let stopped = |why: String, ranking, warnings| Explanation {
@@ -1748,6 +1768,7 @@ fn output_summaries(
     rms_before: &[f64],
     after_weighted: &[f64],
     judged: Vec<Judgement>,
+    rhos: &[f64],
 ) -> Vec<OutputSummary> {
     let t = target.rec.t();
     let nr = target.rec.len();
@@ -1779,6 +1800,7 @@ fn output_summaries(
                 rms_after: rms_after[j],
                 remaining_windows: failure_windows(t, &resid, band, 5.0 * dt),
                 judgement: Some(judgement),
+                noise_rho: rhos.get(j).copied().unwrap_or(f64::NAN),
             }
         })
         .collect()
@@ -1823,6 +1845,7 @@ fn cannot_judge(
             rms_after: rms_before,
             remaining_windows: Vec::new(),
             judgement: None,
+            noise_rho: f64::NAN,
         });
     }
     Ok(Explanation {
