@@ -17,6 +17,12 @@ use modelgap::{ExplainOptions, Explanation, Recording, explain};
 /// multisine that reverses the shaft many times, 4 s at 1 kHz, with white
 /// noise of `noise` × each output's range.
 fn motor_with(hidden: Option<&str>, noise: f64, seed: u64) -> Recording {
+    motor_driven(hidden, noise, seed, false)
+}
+
+/// [`motor_with`], or (`stepped`) driven by voltage steps held 0.4 s each, some of them 0 V,
+/// where the shaft comes to rest and friction holds it.
+fn motor_driven(hidden: Option<&str>, noise: f64, seed: u64, stepped: bool) -> Recording {
     let mut g = library::builtin("dc-motor").unwrap();
     let shaft = g.find("1m").unwrap();
     if let Some(law) = hidden {
@@ -39,11 +45,16 @@ fn motor_with(hidden: Option<&str>, noise: f64, seed: u64) -> Recording {
         g.bond(shaft, id).unwrap();
     }
     let t: Vec<f64> = (0..=4000).map(|k| k as f64 * 1e-3).collect();
+    let steps = [6.0, 12.0, 0.0, -12.0, -4.0, 0.0, 9.0, 0.0, 3.0, -8.0, 0.0];
     let v: Vec<f64> = t
         .iter()
         .map(|&t| {
-            6.0 * (std::f64::consts::TAU * 0.7 * t).sin()
-                + 2.0 * (std::f64::consts::TAU * 3.3 * t).sin()
+            if stepped {
+                steps[((t / 0.4) as usize).min(steps.len() - 1)]
+            } else {
+                6.0 * (std::f64::consts::TAU * 0.7 * t).sin()
+                    + 2.0 * (std::f64::consts::TAU * 3.3 * t).sin()
+            }
         })
         .collect();
     let inputs = Inputs::new().with(
@@ -51,7 +62,7 @@ fn motor_with(hidden: Option<&str>, noise: f64, seed: u64) -> Recording {
         Drive::Sampled {
             t: t.clone(),
             values: v.clone(),
-            hold: Hold::Linear,
+            hold: if stepped { Hold::Zero } else { Hold::Linear },
         },
     );
     let run = simulate(
@@ -164,6 +175,36 @@ fn stribeck_friction_is_seen_at_the_shaft_and_named_with_its_shape() {
     assert!(
         (4.5..8.0).contains(&vs),
         "Stribeck speed {vs}\n{}",
+        story(&ex)
+    );
+    at_floor(&ex, 1.3);
+}
+
+/// Coulomb friction that differs by direction (0.015 N m forward, 0.006 N m backward, each
+/// reached linearly within 0.1 rad/s: not the library's tanh): a sign term beside its
+/// magnitude, `|tanh(v/ε)|`, names both levels;
+/// a linear-in-speed `|v|` (viscous friction that differs by direction) was all the library
+/// had, and a real geared drive's asymmetric friction was left partial with it.
+#[test]
+fn coulomb_friction_that_differs_by_direction_is_named_with_both_levels() {
+    let rec = motor_driven(
+        Some("0.015 * min(max(f / 0.1, 0), 1) + 0.006 * max(min(f / 0.1, 0), -1)"),
+        0.002,
+        4,
+        true,
+    );
+    // Steps held: the shaft rests at 0 V, where a constant torque would turn it and
+    // friction holds it.
+    let mut g = library::builtin("dc-motor").unwrap();
+    g.add_input("V", 12.0, "V", "armature voltage").unwrap();
+    let model = BondModel::new(g).with_hold(Hold::Zero);
+    let ex = explain(&model, &rec, &ExplainOptions::default()).unwrap();
+    let law = chosen_law(&ex);
+    let (sign, magnitude) = (param(&law, "c_sign"), param(&law, "c_smag"));
+    let (forward, backward) = (sign + magnitude, sign - magnitude);
+    assert!(
+        (forward - 0.015).abs() < 0.00075 && (backward - 0.006).abs() < 0.0006,
+        "forward {forward}, backward {backward}\n{}",
         story(&ex)
     );
     at_floor(&ex, 1.3);

@@ -75,7 +75,33 @@ impl Causality {
                 .map(|(_, b)| b.to_string())
                 .collect::<Vec<_>>()
                 .join(", "),
+            hint: self.derivative_hint(g),
         })
+    }
+
+    /// What to change, by the kinds of storage in derivative causality.
+    fn derivative_hint(&self, g: &BondGraph) -> String {
+        let kinds: Vec<ElementKind> = (self.derivative.iter())
+            .map(|(e, _)| g.element(*e).kind)
+            .collect();
+        let mut hints = Vec::new();
+        if kinds.contains(&ElementKind::I) {
+            hints.push(
+                "an I there moves rigidly with another inertia or a flow source (its flow is set \
+                 through junctions, transformers or gyrators): merge the two inertias into one \
+                 (behind a transformer of ratio n an inertia counts n² times on the other side), \
+                 or model the compliance between them (a C on a 0-junction: a shaft's \
+                 stiffness, a belt's spring)",
+            );
+        }
+        if kinds.contains(&ElementKind::C) {
+            hints.push(
+                "a C there is held at another capacitance's effort or an effort source's: \
+                 merge the two capacitances into one, or model the resistance between them (an \
+                 R on a 1-junction: a pipe, a wire)",
+            );
+        }
+        hints.join("; ")
     }
 }
 

@@ -118,13 +118,15 @@ pub enum BondError {
     /// Storage elements were forced into derivative causality; the derived
     /// equations would need differentiated inputs.
     #[error(
-        "storage elements forced into derivative causality: {elements} (bonds {bonds}); simulation needs integral causality"
+        "storage elements forced into derivative causality: {elements} (bonds {bonds}); simulation needs integral causality: {hint}"
     )]
     DerivativeCausality {
         /// The storage elements, comma-separated.
         elements: String,
         /// Their bonds, comma-separated.
         bonds: String,
+        /// What to change in the model, by the kinds of storage.
+        hint: String,
     },
     /// The causal equations contain an algebraic loop.
     #[error(

@@ -181,7 +181,12 @@ fn assert_derivative(g: &BondGraph, element: &str, n: u32) {
     assert_eq!(c.derivative, vec![(id, bond(n))]);
     assert!(!c.is_integral(g, id));
     let err = Equations::derive(g, &c).unwrap_err();
-    let BondError::DerivativeCausality { elements, bonds } = &err else {
+    let BondError::DerivativeCausality {
+        elements,
+        bonds,
+        hint,
+    } = &err
+    else {
         panic!("expected derivative causality, got {err:?}");
     };
     assert_eq!(
@@ -192,6 +197,11 @@ fn assert_derivative(g: &BondGraph, element: &str, n: u32) {
     assert!(
         msg.contains(&format!("{element} (bonds {n})")),
         "message names the element and its bond: {msg}"
+    );
+    // And says what to change.
+    assert!(
+        hint.contains("merge") && msg.contains(hint.as_str()),
+        "{msg}"
     );
 }
 

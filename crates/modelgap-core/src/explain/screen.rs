@@ -11,6 +11,7 @@
 //! | sign | `tanh(v/ε)`, ε scanned from sharp to smooth | flows |
 //! | Stribeck | `tanh(v/ε)·exp(−(v/v_s)²)`, `v_s` scanned | flows |
 //! | absolute | `|v|` (with `v`: viscous friction that differs by direction) | flows |
+//! | sign magnitude | `|tanh(v/ε)|`, ε scanned (with a sign term: Coulomb friction that differs by direction) | flows |
 //! | quadratic drag | `v·|v|` | flows, positions, displacements |
 //! | cubic | `v³` | flows, positions, displacements |
 //! | square root | `√max(e, 0)` | node efforts (an orifice) |
@@ -67,6 +68,9 @@ pub enum Family {
     Stribeck,
     /// `|v|`: with a linear term, viscous friction that differs by direction.
     Absolute,
+    /// `|tanh(v/ε)|`: with a sign term, Coulomb friction that differs by
+    /// direction (a level while moving, either way, that holds nothing at rest).
+    SignMagnitude,
     /// `v·|v|`: fan, aerodynamic or turbulent drag.
     QuadraticDrag,
     /// `v³`: a hardening (or softening) spring, a cubic damper.
@@ -103,6 +107,9 @@ impl Family {
             Family::Sign => "a sign-like term (Coulomb friction, a contact drop)",
             Family::Stribeck => "a Stribeck excess at low speed",
             Family::Absolute => "a term in |v| (viscous friction that differs by direction)",
+            Family::SignMagnitude => {
+                "a term in |sign v| (Coulomb friction that differs by direction)"
+            }
             Family::QuadraticDrag => "a quadratic drag (fan, air, turbulence)",
             Family::Cubic => "a cubic term (hardening spring, cubic damping)",
             Family::SquareRoot => "a square-root outflow (an orifice)",
@@ -587,6 +594,30 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
                             ehi,
                         ),
                         v.iter().map(|x| (x / e).tanh()).collect(),
+                    ));
+                }
+                // The same widths for the level friction takes while moving either way: with
+                // a sign term, Coulomb friction that differs by direction.
+                for &e in &eps {
+                    out.push(single(
+                        Family::SignMagnitude,
+                        n,
+                        eps.len(),
+                        shaped(
+                            term(
+                                "c_smag",
+                                Family::SignMagnitude,
+                                format!("|tanh({} / §)|", a.label),
+                                format!("abs(tanh({n} / §))"),
+                                eu.clone(),
+                            ),
+                            "eps",
+                            u,
+                            e,
+                            elo,
+                            ehi,
+                        ),
+                        v.iter().map(|x| (x / e).tanh().abs()).collect(),
                     ));
                 }
                 let sharp = 0.003 * scale;
