@@ -119,7 +119,7 @@ pub fn cases() -> Vec<HiddenCase> {
             ..case("cogging", "dc-motor", &[("cogging@1m", &[0.01, 8.0])])
         },
         case("fault", "dc-motor", &[("fault:R", &[1.6, 2.25])]),
-        case("saturation", "dc-motor", &[("saturation@L", &[150.0])]),
+        case("saturation", "dc-motor", &[("saturation@L", &[150.0, 1.0])]),
         case("nothing", "dc-motor", &[]),
         case("buck-load", "buck-motor", &[("load@1m", &[0.05])]),
         case("buck-nothing", "buck-motor", &[]),

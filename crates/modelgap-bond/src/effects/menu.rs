@@ -71,8 +71,9 @@ use crate::graph::{BondGraph, ElementId};
 ///   to fifty; a first-order Padé all-pass, one state).
 /// - Each effect the model file declares (`[[candidates]]`): `declared:<name>`.
 /// - For each electrical I with a linear law: `saturation@<I>`
-///   (`f = p / L · (1 + a_sat p²)`, `a_sat` ≥ 0 in 1/Wb², scale `0.1 / p_peak²`
-///   with `p_peak` the peak flux of a start-up).
+///   (`f = p / L · (1 + a_sat p²)^m_sat`, `a_sat` ≥ 0 in 1/Wb², scale `0.1 / p_peak²`
+///   with `p_peak` the peak flux of a start-up; `m_sat` in [1, 6] from three grid
+///   starts).
 /// - For each electrical R with a linear law on an electrical 1-junction:
 ///   `heating@<R>` (`e = R (1 + a_heat E) f`, `E` the energy it has
 ///   dissipated since the start, a new state; `a_heat` from 0 to `4 / E_run`,

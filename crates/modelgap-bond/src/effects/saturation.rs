@@ -1,9 +1,14 @@
 //! `saturation@<I>`: magnetic saturation of an inductance.
 
+/// Bounds of the saturation's exponent `m` (dimensionless).
+const EXPONENTS: (f64, f64) = (1.0, 6.0);
+/// Grid starts of the exponent.
+const EXPONENT_GRID: usize = 3;
+
 use modelgap_core::{Candidate, EffectKind, EffectParam};
 
 use super::Domain;
-use super::def::{EffectDef, all_zero};
+use super::def::EffectDef;
 use super::edit::{bad, ident, law, new_param};
 use super::menu::{head, law_value};
 use super::scales::Scales;
@@ -15,7 +20,10 @@ use crate::graph::{BondGraph, ElementId};
 use crate::simulate::ParamChange;
 
 /// Magnetic saturation of an electrical I with a linear law: its law
-/// becomes `f = p / L · (1 + a_sat p²)`, `a_sat` ≥ 0 in 1/Wb².
+/// becomes `f = p / L · (1 + a_sat p²)^m`, `a_sat` ≥ 0 in 1/Wb² and `m` in
+/// [1, 6]: with `m = 1` the current grows by a cube of the flux, with larger
+/// `m` it turns up more sharply as the core saturates (a flux `L i_s tanh(i/i_s)`
+/// or `L i_s atan(i/i_s)` reaches a limit the cube approaches too slowly).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Saturation {
     /// The I element.
@@ -86,17 +94,14 @@ impl EffectDef for Saturation {
             name: format!("magnetic saturation of {what}"),
             kind: EffectKind::MissingElement,
             acts_on: el.name.clone(),
-            params: vec![EffectParam::new(
-                "a_sat",
-                "1/Wb^2",
-                0.0,
-                (0.0, 10.0 * a),
-                0.1 * a,
-            )],
+            params: vec![
+                EffectParam::new("a_sat", "1/Wb^2", 0.0, (0.0, 10.0 * a), 0.1 * a),
+                EffectParam::new("m_sat", "1", 1.0, EXPONENTS, 0.5).with_grid(EXPONENT_GRID),
+            ],
         }
     }
 
-    /// Changes the law of the I to `f = p / L · (1 + a p²)`.
+    /// Changes the law of the I to `f = p / L · (1 + a p²)^m`.
     fn edit(&self, g: &mut BondGraph, c: &Candidate, values: &[f64]) -> Result<Vec<ParamChange>> {
         let target = g.element(self.element).name.clone();
         let Law::Linear(old) = g.element(self.element).law.clone() else {
@@ -116,7 +121,17 @@ impl EffectDef for Saturation {
                 c.id
             ),
         )?;
-        let flow = law(c, &format!("p / ({old}) * (1 + {a_name} * p^2)"))?;
+        let m_name = new_param(
+            g,
+            &format!("m_sat_{}", ident(&target)),
+            values[1],
+            "1",
+            &format!(
+                "saturation: the exponent of its growth (added effect {})",
+                c.id
+            ),
+        )?;
+        let flow = law(c, &format!("p / ({old}) * (1 + {a_name} * p^2)^{m_name}"))?;
         g.element_mut(self.element).law = Law::Nonlinear {
             effort: None,
             flow: Some(flow),
@@ -124,7 +139,9 @@ impl EffectDef for Saturation {
         Ok(Vec::new())
     }
 
+    /// With `a_sat = 0` the law is linear, whatever the exponent.
     fn vanishing_values(c: &Candidate) -> Option<Vec<f64>> {
-        all_zero(c)
+        let m = c.params.get(1).map_or(1.0, |p| p.initial);
+        Some(vec![0.0, m])
     }
 }

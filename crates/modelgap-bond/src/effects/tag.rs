@@ -133,7 +133,7 @@ mod tests {
     fn the_expected_prefixes_read_as_a_list() {
         assert_eq!(
             Tag::expected(),
-            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, backlash@, cogging@, brush@, saturation@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, power@, store@, deadzone@, gain@, limit@, lag@, offset@, clip@, scale@, delay@, declared: or law@"
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, backlash@, cogging@, brush@, saturation@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, power@, store@, deadzone@, gain@, limit@, actuator-lag@, actuator-delay@, lag@, offset@, clip@, scale@, delay@, declared: or law@"
         );
     }
 }

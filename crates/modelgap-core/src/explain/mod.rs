@@ -850,8 +850,17 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
     } else {
         (Vec::new(), Vec::new(), Vec::new())
     };
-    for (n, f) in names.iter().zip(&target.floors) {
-        warnings.extend(f.warning(n, &model.unit(n)));
+    // A floor from correlated third differences is likely too low, unless the chosen effect
+    // reaches it with a white residual (a fast drive's own content, not coloured noise, made
+    // them correlated): that warning is withdrawn at the end.
+    let mut coloured_floor_warnings: Vec<(usize, String)> = Vec::new();
+    for (j, (n, f)) in names.iter().zip(&target.floors).enumerate() {
+        if let Some(w) = f.warning(n, &model.unit(n)) {
+            if f.kind == FloorKind::Coloured {
+                coloured_floor_warnings.push((j, w.clone()));
+            }
+            warnings.push(w);
+        }
     }
     // Outputs whose estimated floor is likely too high: reaching it says nothing.
     let floor_too_high: Vec<String> = (names.iter().zip(&target.floors))
@@ -1369,6 +1378,13 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         }
     }
     let outputs = summary(&after_weighted, judged_after, &judge.floors);
+    for (j, w) in &coloured_floor_warnings {
+        let reached = (outputs.get(*j).and_then(|o| o.judgement.as_ref()))
+            .is_some_and(|jd| jd.at_floor && !jd.coloured);
+        if reached && !chosen.is_empty() {
+            warnings.retain(|x| x != w);
+        }
+    }
     clock.lap("judge");
     Ok(Explanation {
         model: model.name(),

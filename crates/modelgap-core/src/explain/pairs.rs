@@ -37,8 +37,19 @@ pub(super) fn screen_seconds(
     // The laws of what the first leaves: the missing effort estimated again with the first
     // built in (a Stribeck dip that Coulomb friction leaves at each reversal).
     let rediscovered = laws_on_top(target, best);
+    // A law found on the model as given at the place of a first that is a law there too is
+    // that place's law said another way: beside it, the pair is one law with its terms twice
+    // (a geared drive's friction as a sign law and a symbolic law, each with its `|v|`).
+    // What the first leaves there is found again on top of it.
+    let place = |id: &str| {
+        id.strip_prefix("law@")
+            .and_then(|r| r.split_once(':'))
+            .map(|p| p.0.to_string())
+    };
+    let first_place = place(&first.candidate.id);
     let others: Vec<&Candidate> = candidates
         .iter()
+        .filter(|c| first_place.is_none() || place(&c.id) != first_place)
         .chain(&rediscovered)
         .filter(|c| c.id != first.candidate.id && !best.equivalent.contains(&c.id))
         .collect();
