@@ -718,10 +718,7 @@ impl PyOutputSummary {
     /// at its cap of 0.999 the residual is mostly model error. ``None`` when nothing was scored.
     #[getter]
     fn noise_rho(&self) -> Option<f64> {
-        self.inner
-            .noise_rho
-            .is_finite()
-            .then_some(self.inner.noise_rho)
+        self.inner.noise_rho
     }
     /// Why the residual is not what noise leaves (empty when it is, or when not judged).
     #[getter]

@@ -224,6 +224,10 @@ def test_stage_timings_and_floor_method_are_read(coulomb_explained: modelgap.Exp
     assert all(wall >= 0.0 and (cpu is None or cpu >= 0.0) for _, wall, cpu in coulomb_explained.timings)
     # The bundled-style recording's noise is white: its floor comes from third differences.
     assert {o.noise_method for o in coulomb_explained.outputs} == {"white"}
+    # The noise model the scores whiten each output with: an AR(1) coefficient up to its cap.
+    assert all(
+        o.noise_rho is not None and 0.0 <= o.noise_rho <= 0.999 for o in coulomb_explained.outputs
+    )
     # Timings are not part of what an explanation says.
     again = pickle.loads(pickle.dumps(coulomb_explained))
     assert again == coulomb_explained and again.timings == coulomb_explained.timings

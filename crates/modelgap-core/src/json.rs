@@ -146,7 +146,7 @@ pub fn explanation_json(ex: &Explanation) -> Value {
                 "rms_after": finite(o.rms_after),
                 "remaining_windows": remaining,
                 "judgement": o.judgement.as_ref().map(judgement_json),
-                "noise_rho": finite(o.noise_rho),
+                "noise_rho": o.noise_rho.map(finite),
             })
         })
         .collect();

@@ -275,8 +275,7 @@ pub fn comparison_text(c: &Comparison) -> String {
 /// each output's AR(1) noise coefficient, and what a coefficient at its cap means.
 pub fn scoring_basis(ex: &Explanation) -> String {
     let rhos: Vec<(&str, f64)> = (ex.outputs.iter())
-        .filter(|o| o.noise_rho.is_finite())
-        .map(|o| (o.name.as_str(), o.noise_rho))
+        .filter_map(|o| Some((o.name.as_str(), o.noise_rho?)))
         .collect();
     if rhos.is_empty() {
         return format!(
@@ -294,12 +293,14 @@ pub fn scoring_basis(ex: &Explanation) -> String {
         let hi = rhos.iter().map(|r| r.1).fold(f64::NEG_INFINITY, f64::max);
         format!("{lo:.3}–{hi:.3} over {} outputs", rhos.len())
     };
-    let capped = rhos.iter().any(|r| r.1 >= crate::explain::NOISE_RHO_CAP);
+    // Within a hundredth of 1 the whitened residual is, in effect, its changes from sample
+    // to sample.
+    let capped = rhos.iter().any(|r| r.1 >= 0.99);
     format!(
         "a BIC difference on the residual whitened with the noise's AR(1) coefficient ({list}){}",
         if capped {
-            "; at its cap of 0.999 the residual is mostly model error, and the scores weigh \
-             its changes from sample to sample"
+            "; at or near its cap of 0.999 the residual is mostly model error, and the scores \
+             weigh its changes from sample to sample"
         } else {
             ""
         }

@@ -314,13 +314,9 @@ pub struct OutputSummary {
     /// The AR(1) coefficient of the noise model the scores whiten this output's residual
     /// with (read from the best fit's residual; [`NOISE_RHO_CAP`] when that residual is
     /// mostly model error, and the scores then weigh its changes from sample to sample).
-    /// NaN when nothing was scored.
-    #[serde(default = "f64_nan")]
-    pub noise_rho: f64,
-}
-
-fn f64_nan() -> f64 {
-    f64::NAN
+    /// `None` when nothing was scored.
+    #[serde(default)]
+    pub noise_rho: Option<f64>,
 }
 
 /// The largest AR(1) coefficient the noise model takes ([`noise_rho`]).
@@ -1816,7 +1812,7 @@ fn output_summaries(
                 rms_after: rms_after[j],
                 remaining_windows: failure_windows(t, &resid, band, 5.0 * dt),
                 judgement: Some(judgement),
-                noise_rho: rhos.get(j).copied().unwrap_or(f64::NAN),
+                noise_rho: rhos.get(j).copied(),
             }
         })
         .collect()
@@ -1861,7 +1857,7 @@ fn cannot_judge(
             rms_after: rms_before,
             remaining_windows: Vec::new(),
             judgement: None,
-            noise_rho: f64::NAN,
+            noise_rho: None,
         });
     }
     Ok(Explanation {
