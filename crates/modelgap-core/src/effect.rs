@@ -60,6 +60,12 @@ pub struct EffectParam {
     /// count.
     #[serde(default)]
     pub grid: usize,
+    /// The grid's start values are spaced evenly in the logarithm instead
+    /// (a time constant from a tenth of a sample to a fifth of the record:
+    /// evenly spaced starts would all lie far above a lag of tens of
+    /// samples). Only for a positive lower bound.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub log_grid: bool,
     /// The lattice a discrete parameter lives on (a vertex's column, a
     /// harmonic's order): its values are `lower + k · step`. 0 (the default)
     /// for a continuous parameter. A fit holds a discrete parameter while it
@@ -123,6 +129,7 @@ impl EffectParam {
             upper: bounds.1,
             scale,
             grid: 0,
+            log_grid: false,
             step: 0.0,
             prior: None,
         }
@@ -134,6 +141,45 @@ impl EffectParam {
     pub fn with_grid(mut self, grid: usize) -> EffectParam {
         self.grid = grid;
         self
+    }
+
+    /// The same parameter with `grid` start values spaced evenly in the
+    /// logarithm across its bounds (see [`EffectParam::log_grid`]); evenly
+    /// spaced when the lower bound is not positive.
+    ///
+    /// # Example
+    /// ```
+    /// # use modelgap_core::EffectParam;
+    /// let tau = EffectParam::new("tau", "s", 1e-3, (1e-4, 1.0), 1e-3).with_log_grid(5);
+    /// let starts = tau.grid_points();
+    /// assert_eq!(starts.len(), 5);
+    /// assert!((starts[1] / 1e-3 - 1.0).abs() < 1e-12 && (starts[4] - 1.0).abs() < 1e-12);
+    /// // Across a bound of 0 the starts are evenly spaced.
+    /// let b = EffectParam::new("b", "N m s/rad", 0.0, (0.0, 1.0), 0.1).with_log_grid(3);
+    /// assert_eq!(b.grid_points(), vec![0.0, 0.5, 1.0]);
+    /// ```
+    #[must_use]
+    pub fn with_log_grid(mut self, grid: usize) -> EffectParam {
+        self.grid = grid;
+        self.log_grid = self.lower > 0.0;
+        self
+    }
+
+    /// The start values of the grid (see [`EffectParam::grid`]): `initial`
+    /// alone for a grid of one, none for no grid.
+    pub fn grid_points(&self) -> Vec<f64> {
+        let n = self.grid;
+        (0..n)
+            .map(|k| {
+                if n == 1 {
+                    self.initial
+                } else if self.log_grid && self.lower > 0.0 && self.upper > self.lower {
+                    self.lower * (self.upper / self.lower).powf(k as f64 / (n - 1) as f64)
+                } else {
+                    self.lower + (self.upper - self.lower) * k as f64 / (n - 1) as f64
+                }
+            })
+            .collect()
     }
 
     /// The same parameter on a lattice of `step` (see [`EffectParam::step`]).

@@ -32,6 +32,11 @@ use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
 use crate::simulate::ParamChange;
 
+/// Start values of an actuator's lag or delay, spaced evenly in the logarithm across its
+/// bounds: the screen's linearised step from one sample's lag undersized a heater's 40 s
+/// lag (1 s samples) to 26 s, and a sensor's lag, fitted exactly, took its place.
+const LAG_GRID: usize = 6;
+
 /// A first-order lag between a driven source's command and what it imposes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ActuatorLag {
@@ -101,13 +106,10 @@ impl EffectDef for ActuatorLag {
             ),
             kind: EffectKind::MissingElement,
             acts_on: el.name.clone(),
-            params: vec![EffectParam::new(
-                "tau",
-                "s",
-                dt,
-                (0.1 * dt, (0.2 * length).max(dt)),
-                dt,
-            )],
+            params: vec![
+                EffectParam::new("tau", "s", dt, (0.1 * dt, (0.2 * length).max(dt)), dt)
+                    .with_log_grid(LAG_GRID),
+            ],
         }
     }
 
@@ -147,13 +149,10 @@ impl EffectDef for ActuatorDelay {
             ),
             kind: EffectKind::MissingElement,
             acts_on: el.name.clone(),
-            params: vec![EffectParam::new(
-                "delay",
-                "s",
-                dt,
-                (0.1 * dt, 50.0 * dt),
-                dt,
-            )],
+            params: vec![
+                EffectParam::new("delay", "s", dt, (0.1 * dt, 50.0 * dt), dt)
+                    .with_log_grid(LAG_GRID),
+            ],
         }
     }
 

@@ -471,19 +471,7 @@ pub(super) fn screen_candidate(
         .iter()
         .enumerate()
         .filter(|(_, p)| p.grid > 0)
-        .map(|(i, p)| {
-            let n = p.grid.max(1);
-            let pts = (0..n)
-                .map(|k| {
-                    if n == 1 {
-                        p.initial
-                    } else {
-                        p.lower + (p.upper - p.lower) * k as f64 / (n - 1) as f64
-                    }
-                })
-                .collect();
-            (i, pts)
-        })
+        .map(|(i, p)| (i, p.grid_points()))
         .collect();
     let mut combos: Vec<Vec<usize>> = vec![Vec::new()];
     for (_, pts) in &grid_axes {

@@ -2068,6 +2068,7 @@ mod tests {
             upper: 10.0,
             scale,
             grid: 0,
+            log_grid: false,
             step: 0.0,
             prior: None,
         }
