@@ -629,10 +629,12 @@ fn ranked(target: &Target, f: &Fitted, white: &Whitening) -> RankedCandidate {
                 // The sandwich over the fit's own residual: it holds when that residual is
                 // coloured noise or a model error the fit leaves (the white formula scaled by
                 // effective samples of the noise was 45× too wide on smooth residuals).
+                // A ± wider than the bounds says the data do not pin the value at all (a fault
+                // time ± 38 000 s on a 30 s record): given as not determined, with no ±.
                 std_error: match (at_bound, f.report.as_ref()) {
-                    (None, Some(r)) => {
-                        (r.robust_std_errors.get(i).copied()).unwrap_or(f64::INFINITY)
-                    }
+                    (None, Some(r)) => (r.robust_std_errors.get(i).copied())
+                        .filter(|se| *se <= p.upper - p.lower)
+                        .unwrap_or(f64::INFINITY),
                     _ => f64::INFINITY,
                 },
                 at_bound: at_bound.map(str::to_owned),
