@@ -15,65 +15,55 @@ use modelgap::{ExplainOptions, Explanation, Recording, Signal, explain};
 
 const MOTOR: &str = include_str!("../crates/modelgap-bond/models/dc-motor.toml");
 
-/// The motor `truth` driven by a voltage that steps and reverses, 4 s at 1 kHz; `omega`
-/// passed through `sensor` (sample by sample) before white noise is added to both outputs.
-fn recording(truth: &str, sensor: impl Fn(&[f64]) -> Vec<f64>) -> Recording {
-    let g = read_model(truth).unwrap();
-    let t: Vec<f64> = (0..4000).map(|k| k as f64 * 1e-3).collect();
-    let v: Vec<f64> = t
-        .iter()
-        .map(|&t| [6.0, 12.0, -12.0, -4.0, 9.0, 0.0, 3.0, -8.0][(t / 0.5) as usize % 8])
-        .collect();
-    let inputs = Inputs::new().with(
-        "V",
-        Drive::Sampled {
-            t: t.clone(),
-            values: v.clone(),
-            hold: Hold::Zero,
-        },
-    );
-    let run = simulate(&g, &inputs, &t, &SimOptions::default()).unwrap();
-    let mut gauss = Gaussian::new(17);
-    let i: Vec<f64> = (run.output("i").unwrap().iter())
-        .map(|x| x + 0.01 * gauss.sample())
-        .collect();
-    let omega: Vec<f64> = (sensor(run.output("omega").unwrap()).iter())
-        .map(|x| x + 0.2 * gauss.sample())
-        .collect();
-    Recording::new(
-        t,
-        vec![
-            Signal::new("V", v),
-            Signal::new("i", i),
-            Signal::new("omega", omega),
-        ],
-    )
-    .unwrap()
+/// The voltage the motor is commanded: steps that reverse, 0.5 s each.
+fn command(t: f64) -> f64 {
+    [6.0, 12.0, -12.0, -4.0, 9.0, 0.0, 3.0, -8.0][(t / 0.5) as usize % 8]
 }
 
-/// [`recording`]'s motor and drive, but the armature gets the commanded voltage through
-/// `driver` (given the command on a 20 kHz grid, it returns what is delivered there): the
-/// recording holds the command, as a controller logs it.
+/// The motor `truth` driven by [`command`], 4 s at 1 kHz; `omega` passed through `sensor`
+/// (sample by sample) before white noise is added to both outputs.
+fn recording(truth: &str, sensor: impl Fn(&[f64]) -> Vec<f64>) -> Recording {
+    let t: Vec<f64> = (0..4000).map(|k| k as f64 * 1e-3).collect();
+    let v: Vec<f64> = t.iter().map(|&t| command(t)).collect();
+    let drive = Drive::Sampled {
+        t: t.clone(),
+        values: v,
+        hold: Hold::Zero,
+    };
+    noisy(truth, drive, sensor, 17)
+}
+
+/// The motor driven by [`command`] through `driver` (given the command on a 20 kHz grid,
+/// it returns what is delivered there); the recording holds the command, as a controller
+/// logs it.
 fn driven_recording(driver: impl Fn(&[f64]) -> Vec<f64>) -> Recording {
-    let g = read_model(MOTOR).unwrap();
-    let command = |t: f64| [6.0, 12.0, -12.0, -4.0, 9.0, 0.0, 3.0, -8.0][(t / 0.5) as usize % 8];
     let fine: Vec<f64> = (0..80_000).map(|k| k as f64 * 5e-5).collect();
     let delivered = driver(&fine.iter().map(|&t| command(t)).collect::<Vec<_>>());
-    let inputs = Inputs::new().with(
-        "V",
-        Drive::Sampled {
-            t: fine,
-            values: delivered,
-            hold: Hold::Linear,
-        },
-    );
+    let drive = Drive::Sampled {
+        t: fine,
+        values: delivered,
+        hold: Hold::Linear,
+    };
+    noisy(MOTOR, drive, <[f64]>::to_vec, 23)
+}
+
+/// `truth` simulated 4 s at 1 kHz with `drive` as its voltage, `omega` through `sensor`, white
+/// noise (0.01 A, 0.2 rad/s, seeded) on both outputs, and the commanded voltage recorded.
+fn noisy(truth: &str, drive: Drive, sensor: impl Fn(&[f64]) -> Vec<f64>, seed: u64) -> Recording {
+    let g = read_model(truth).unwrap();
     let t: Vec<f64> = (0..4000).map(|k| k as f64 * 1e-3).collect();
-    let run = simulate(&g, &inputs, &t, &SimOptions::default()).unwrap();
-    let mut gauss = Gaussian::new(23);
+    let run = simulate(
+        &g,
+        &Inputs::new().with("V", drive),
+        &t,
+        &SimOptions::default(),
+    )
+    .unwrap();
+    let mut gauss = Gaussian::new(seed);
     let mut noisy =
         |y: &[f64], s: f64| -> Vec<f64> { y.iter().map(|x| x + s * gauss.sample()).collect() };
     let i = noisy(run.output("i").unwrap(), 0.01);
-    let omega = noisy(run.output("omega").unwrap(), 0.2);
+    let omega = noisy(&sensor(run.output("omega").unwrap()), 0.2);
     let v = t.iter().map(|&t| command(t)).collect();
     Recording::new(
         t,

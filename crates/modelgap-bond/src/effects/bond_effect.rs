@@ -14,7 +14,7 @@ use super::{
     SensorClip, SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness, Store, Viscous,
 };
 use crate::error::{BondError, Result};
-use crate::graph::BondGraph;
+use crate::graph::{BondGraph, ElementId};
 use crate::simulate::ParamChange;
 
 /// A candidate effect of a bond graph, typed: its kind and where it acts.
@@ -235,6 +235,18 @@ impl BondEffect {
                     )
                 })
         };
+        // A source an input drives: where every actuator effect acts.
+        let source = || -> Result<ElementId> {
+            g.find(target)
+                .filter(|&id| DeadZone::at(g, id).is_some())
+                .ok_or_else(|| {
+                    bad(
+                        c,
+                        "",
+                        format!("the model has no source '{target}' driven by an input"),
+                    )
+                })
+        };
         let effect = match tag {
             Tag::Deviation => match steady()? {
                 Faulted::Parameter(d) => Some(BondEffect::Deviation(d)),
@@ -288,61 +300,13 @@ impl BondEffect {
                     .ok_or_else(|| bad(c, "", format!("'{target}' is not a thermal node")))?,
             )),
             Tag::Store => Some(BondEffect::Store(Store { node: node()? })),
-            Tag::DeadZone => {
-                let d = g.find(target).and_then(|id| DeadZone::at(g, id));
-                let d = d.ok_or_else(|| {
-                    bad(
-                        c,
-                        "",
-                        format!("the model has no source '{target}' driven by an input"),
-                    )
-                })?;
-                Some(BondEffect::DeadZone(d))
-            }
-            Tag::Gain => {
-                let k = g.find(target).and_then(|id| ActuatorGain::at(g, id));
-                let k = k.ok_or_else(|| {
-                    bad(
-                        c,
-                        "",
-                        format!("the model has no source '{target}' driven by an input"),
-                    )
-                })?;
-                Some(BondEffect::Gain(k))
-            }
-            Tag::Limit => {
-                let k = g.find(target).and_then(|id| ActuatorLimit::at(g, id));
-                let k = k.ok_or_else(|| {
-                    bad(
-                        c,
-                        "",
-                        format!("the model has no source '{target}' driven by an input"),
-                    )
-                })?;
-                Some(BondEffect::Limit(k))
-            }
-            Tag::ActuatorLag => {
-                let k = g.find(target).and_then(|id| ActuatorLag::at(g, id));
-                let k = k.ok_or_else(|| {
-                    bad(
-                        c,
-                        "",
-                        format!("the model has no source '{target}' driven by an input"),
-                    )
-                })?;
-                Some(BondEffect::ActuatorLag(k))
-            }
-            Tag::ActuatorDelay => {
-                let k = g.find(target).and_then(|id| ActuatorDelay::at(g, id));
-                let k = k.ok_or_else(|| {
-                    bad(
-                        c,
-                        "",
-                        format!("the model has no source '{target}' driven by an input"),
-                    )
-                })?;
-                Some(BondEffect::ActuatorDelay(k))
-            }
+            Tag::DeadZone => Some(BondEffect::DeadZone(DeadZone { source: source()? })),
+            Tag::Gain => Some(BondEffect::Gain(ActuatorGain { source: source()? })),
+            Tag::Limit => Some(BondEffect::Limit(ActuatorLimit { source: source()? })),
+            Tag::ActuatorLag => Some(BondEffect::ActuatorLag(ActuatorLag { source: source()? })),
+            Tag::ActuatorDelay => Some(BondEffect::ActuatorDelay(ActuatorDelay {
+                source: source()?,
+            })),
             Tag::Lag => {
                 let l = SensorLag::named(g, target).ok_or_else(|| {
                     bad(
