@@ -611,7 +611,7 @@ fn air_drag_on_a_pendulum_far_from_its_model_is_found_where_it_acts() {
     let (fs, duration) = (200.0, 30.0);
     let n = (fs * duration) as usize;
     let t: Vec<f64> = (0..n).map(|k| k as f64 / fs).collect();
-    let mut noise = Noise(0x5eed_0f_9e);
+    let mut noise = Noise(0x5eed_0f9e);
     // A staircase of torques, 1.5 s each, and a slow sine.
     let levels = [
         0.225, 0.715, 0.496, -0.495, -0.360, 0.672, -0.891, 0.578, 0.535, -0.058, -0.355, -0.399,

@@ -132,6 +132,7 @@ impl From<&PyEffectParam> for EffectParam {
             upper: p.upper,
             scale: p.scale,
             grid: 0,
+            log_grid: false,
             step: 0.0,
             prior: p
                 .prior
