@@ -223,8 +223,17 @@ impl Law {
     /// The law with its numbers, in words:
     /// `0.021 N m · tanh(speed / 0.01 rad/s) + 0.002 N m`.
     pub fn describe(&self) -> String {
-        let parts: Vec<String> = (self.terms.iter())
-            .map(|t| {
+        // Each term by the size of its coefficient; a negative one after the first joins
+        // with a minus sign (`+ -9.7e-4` read as a typo).
+        let parts: Vec<(bool, String)> = (self.terms.iter())
+            .enumerate()
+            .map(|(i, t)| {
+                let negative = i > 0 && t.coefficient < 0.0;
+                let c = if negative {
+                    -t.coefficient
+                } else {
+                    t.coefficient
+                };
                 let unit = if t.unit.is_empty() || t.unit == "1" {
                     String::new()
                 } else {
@@ -236,14 +245,22 @@ impl Law {
                         .replace('§', &format!("{} {}", sig(sh.value), sh.unit)),
                     None => t.label.clone(),
                 };
-                if t.family == Family::Constant {
-                    format!("{}{unit}", sig(t.coefficient))
+                let text = if t.family == Family::Constant {
+                    format!("{}{unit}", sig(c))
                 } else {
-                    format!("{}{unit} · {label}", sig(t.coefficient))
-                }
+                    format!("{}{unit} · {label}", sig(c))
+                };
+                (negative, text)
             })
             .collect();
-        parts.join(" + ")
+        let mut out = String::new();
+        for (i, (negative, text)) in parts.iter().enumerate() {
+            if i > 0 {
+                out.push_str(if *negative { " − " } else { " + " });
+            }
+            out.push_str(text);
+        }
+        out
     }
 
     /// The law with its parameters by name, each term in words:
@@ -1452,4 +1469,45 @@ fn lib_col<'a>(lib: &'a [Block], chosen: &[usize], i: usize) -> &'a [f64] {
         k -= cols.len();
     }
     &[]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_negative_term_joins_the_law_with_a_minus_sign() {
+        let mut sign = term(
+            "c_sign",
+            Family::Sign,
+            "tanh(i / 0.0068 A)".into(),
+            "tanh(i / 0.0068)".into(),
+            "V".into(),
+        );
+        sign.coefficient = 0.2351;
+        let mut drag = term(
+            "c_drag",
+            Family::QuadraticDrag,
+            "i · |i|".into(),
+            "i * abs(i)".into(),
+            "V/((A)^2)".into(),
+        );
+        drag.coefficient = -9.657e-4;
+        let law = Law {
+            location: "1e".into(),
+            place: "the electrical loop (1e)".into(),
+            quantity: Quantity::Effort,
+            unit: "V".into(),
+            terms: vec![sign, drag],
+            explained: 0.95,
+            residual_rms: 0.01,
+            missing_max: 0.3,
+            effective_samples: 100.0,
+            fitted: Vec::new(),
+        };
+        assert_eq!(
+            law.describe(),
+            "0.2351 V · tanh(i / 0.0068 A) − 9.657e-4 V/((A)^2) · i · |i|"
+        );
+    }
 }
