@@ -167,6 +167,16 @@ fn chain_effects_on_places_the_model_lacks_are_refused() {
         ("offset@omega", "offset@speed", "no output 'speed'"),
         ("clip@omega", "clip@speed", "no output 'speed'"),
         (
+            "actuator-lag@V",
+            "actuator-lag@La",
+            "no source 'La' driven by an input",
+        ),
+        (
+            "actuator-delay@V",
+            "actuator-delay@pump",
+            "no source 'pump' driven by an input",
+        ),
+        (
             "offset@omega",
             "law@shaft:c * 1",
             "'shaft:c * 1' is not a junction of the model",
