@@ -149,32 +149,26 @@ pub(super) fn lag_stage_at(
     tau: Expr,
 ) -> Result<String> {
     let suffix = ident(name);
-    let (role, node_name, source_name, store_name, leak_name) = match stage {
+    // The elements' names, and what the stage's node and source are in words.
+    let (role, prefix, source_name, node_text, source_text) = match stage {
         Stage::Sensor => (
             "sensor",
-            format!("sensor_{suffix}"),
+            "",
             format!("sensed_{suffix}"),
-            format!("lag_{suffix}"),
-            format!("relax_{suffix}"),
-        ),
-        Stage::Actuator => (
-            "actuator",
-            format!("actuator_{suffix}"),
-            format!("commanded_{suffix}"),
-            format!("actuator_lag_{suffix}"),
-            format!("actuator_relax_{suffix}"),
-        ),
-    };
-    let (node_text, source_text) = match stage {
-        Stage::Sensor => (
             format!("the sensor of {name}: its reading"),
             format!("what the sensor of {name} follows"),
         ),
         Stage::Actuator => (
+            "actuator",
+            "actuator_",
+            format!("commanded_{suffix}"),
             format!("the actuator of {name}: what it delivers"),
             format!("what the actuator of {name} is commanded"),
         ),
     };
+    let node_name = format!("{role}_{suffix}");
+    let store_name = format!("{prefix}lag_{suffix}");
+    let leak_name = format!("{prefix}relax_{suffix}");
     let store_text = format!("the {role}'s lag");
     let leak_text = format!("the {role} relaxing to what it follows");
     let node = g.add(Element::zero(&node_name).described(&node_text))?;

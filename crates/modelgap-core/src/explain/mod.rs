@@ -674,6 +674,15 @@ fn ranked(target: &Target, f: &Fitted, white: &Whitening) -> RankedCandidate {
     }
 }
 
+/// When a warning about an output is withdrawn once an effect is chosen.
+enum Withdrawn {
+    /// The output started away from the model, and the chosen effect starts where it does.
+    StartExplained,
+    /// Its floor, from correlated third differences, was taken as likely too low, and the
+    /// chosen effect reaches it with a white residual.
+    FloorReached,
+}
+
 /// Tie-break between equally good candidates: the simplest change first — a
 /// parameter that is off, then a missing element, then an abrupt change.
 fn kind_rank(k: crate::effect::EffectKind) -> u8 {
@@ -851,11 +860,11 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
     // A floor from correlated third differences is likely too low, unless the chosen effect
     // reaches it with a white residual (a fast drive's own content, not coloured noise, made
     // them correlated): that warning is withdrawn at the end.
-    let mut coloured_floor_warnings: Vec<(usize, String)> = Vec::new();
+    let mut withdrawable: Vec<(usize, String, Withdrawn)> = Vec::new();
     for (j, (n, f)) in names.iter().zip(&target.floors).enumerate() {
         if let Some(w) = f.warning(n, &model.unit(n)) {
             if f.kind == FloorKind::Coloured {
-                coloured_floor_warnings.push((j, w.clone()));
+                withdrawable.push((j, w.clone(), Withdrawn::FloorReached));
             }
             warnings.push(w);
         }
@@ -893,11 +902,10 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             4.0 * target.sigma[j],
         )
     };
-    let mut start_warnings: Vec<(usize, String)> = Vec::new();
     for j in 0..target.names.len() {
         if let Some(w) = start_off(j, &base_weighted) {
             warnings.push(w.clone());
-            start_warnings.push((j, w));
+            withdrawable.push((j, w, Withdrawn::StartExplained));
         }
     }
 
@@ -1368,18 +1376,14 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             r.qualitative_reason = check.reason;
         }
     }
-    if !chosen.is_empty() {
-        for (j, w) in &start_warnings {
-            if start_off(*j, &after_weighted).is_none() {
-                warnings.retain(|x| x != w);
-            }
-        }
-    }
     let outputs = summary(&after_weighted, judged_after, &judge.floors);
-    for (j, w) in &coloured_floor_warnings {
-        let reached = (outputs.get(*j).and_then(|o| o.judgement.as_ref()))
-            .is_some_and(|jd| jd.at_floor && !jd.coloured);
-        if reached && !chosen.is_empty() {
+    for (j, w, when) in withdrawable.iter().filter(|_| !chosen.is_empty()) {
+        let withdrawn = match when {
+            Withdrawn::StartExplained => start_off(*j, &after_weighted).is_none(),
+            Withdrawn::FloorReached => (outputs.get(*j).and_then(|o| o.judgement.as_ref()))
+                .is_some_and(|jd| jd.at_floor && !jd.coloured),
+        };
+        if withdrawn {
             warnings.retain(|x| x != w);
         }
     }

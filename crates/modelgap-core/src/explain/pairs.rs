@@ -41,15 +41,13 @@ pub(super) fn screen_seconds(
     // that place's law said another way: beside it, the pair is one law with its terms twice
     // (a geared drive's friction as a sign law and a symbolic law, each with its `|v|`).
     // What the first leaves there is found again on top of it.
-    let place = |id: &str| {
-        id.strip_prefix("law@")
-            .and_then(|r| r.split_once(':'))
-            .map(|p| p.0.to_string())
-    };
-    let first_place = place(&first.candidate.id);
+    fn law_at(c: &Candidate) -> Option<&str> {
+        c.id.starts_with("law@").then_some(c.acts_on.as_str())
+    }
+    let first_place = law_at(&first.candidate);
     let others: Vec<&Candidate> = candidates
         .iter()
-        .filter(|c| first_place.is_none() || place(&c.id) != first_place)
+        .filter(|c| first_place.is_none() || law_at(c) != first_place)
         .chain(&rediscovered)
         .filter(|c| c.id != first.candidate.id && !best.equivalent.contains(&c.id))
         .collect();

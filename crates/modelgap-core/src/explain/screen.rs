@@ -591,51 +591,47 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
                     .map(|i| scale * 5e-4 * (600.0_f64).powf(i as f64 / 18.0))
                     .collect();
                 let (elo, ehi) = (eps[0] / 3.0, eps[eps.len() - 1] * 3.0);
-                for &e in &eps {
-                    out.push(single(
+                // Coulomb friction, `tanh(v/ε)`; then, over the same widths, the level friction
+                // takes while moving either way, `|tanh(v/ε)|` (with a sign term: Coulomb
+                // friction that differs by direction).
+                let tanh_scans: [(Family, &str, String, String, bool); 2] = [
+                    (
                         Family::Sign,
-                        n,
-                        eps.len(),
-                        shaped(
-                            term(
-                                "c_sign",
-                                Family::Sign,
-                                format!("tanh({} / §)", a.label),
-                                format!("tanh({n} / §)"),
-                                eu.clone(),
-                            ),
-                            "eps",
-                            u,
-                            e,
-                            elo,
-                            ehi,
-                        ),
-                        v.iter().map(|x| (x / e).tanh()).collect(),
-                    ));
-                }
-                // The same widths for the level friction takes while moving either way: with
-                // a sign term, Coulomb friction that differs by direction.
-                for &e in &eps {
-                    out.push(single(
+                        "c_sign",
+                        format!("tanh({} / §)", a.label),
+                        format!("tanh({n} / §)"),
+                        false,
+                    ),
+                    (
                         Family::SignMagnitude,
-                        n,
-                        eps.len(),
-                        shaped(
-                            term(
-                                "c_smag",
-                                Family::SignMagnitude,
-                                format!("|tanh({} / §)|", a.label),
-                                format!("abs(tanh({n} / §))"),
-                                eu.clone(),
+                        "c_smag",
+                        format!("|tanh({} / §)|", a.label),
+                        format!("abs(tanh({n} / §))"),
+                        true,
+                    ),
+                ];
+                for (family, param, label, expr, magnitude) in tanh_scans {
+                    for &e in &eps {
+                        out.push(single(
+                            family,
+                            n,
+                            eps.len(),
+                            shaped(
+                                term(param, family, label.clone(), expr.clone(), eu.clone()),
+                                "eps",
+                                u,
+                                e,
+                                elo,
+                                ehi,
                             ),
-                            "eps",
-                            u,
-                            e,
-                            elo,
-                            ehi,
-                        ),
-                        v.iter().map(|x| (x / e).tanh().abs()).collect(),
-                    ));
+                            v.iter()
+                                .map(|x| {
+                                    let s = (x / e).tanh();
+                                    if magnitude { s.abs() } else { s }
+                                })
+                                .collect(),
+                        ));
+                    }
                 }
                 let sharp = 0.003 * scale;
                 // Stribeck speeds: eight, log-spaced over 1 % … 60 % of the RMS flow.
