@@ -24,6 +24,7 @@
 mod confirm;
 pub mod estimate;
 mod heldout;
+mod memo;
 mod pairs;
 pub mod screen;
 mod symbolic;
@@ -416,6 +417,9 @@ struct Target<'a> {
     /// a candidate vanishes re-adjusts the calibration with them, as the
     /// confirming fit will.
     calibration_columns: Vec<Vec<f64>>,
+    /// The predictions made so far, of `model` and `accurate`: a point is not
+    /// simulated twice.
+    predictions: memo::Predictions,
 }
 
 impl Target<'_> {
@@ -499,12 +503,15 @@ impl Target<'_> {
             }
             None => effects,
         };
-        model.predict_with(self.rec, effects)?.residuals_into(
-            &self.names,
-            &self.measured,
-            &self.sigma,
-            out,
-        )
+        let own =
+            |m: &dyn Model| std::ptr::addr_eq(m as *const dyn Model, model as *const dyn Model);
+        let prediction = if own(self.model) || self.accurate.is_some_and(own) {
+            self.predictions
+                .get_or_predict(model, effects, || model.predict_with(self.rec, effects))?
+        } else {
+            Arc::new(model.predict_with(self.rec, effects)?)
+        };
+        prediction.residuals_into(&self.names, &self.measured, &self.sigma, out)
     }
 
     fn rms_per_output(&self, weighted: &[f64]) -> Vec<f64> {
@@ -803,6 +810,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
         prior_weight: 0.0,
         nominal: None,
         calibration_columns: Vec::new(),
+        predictions: memo::Predictions::new(names.len() * rec.len()),
     };
     // The model's free parameters: calibrated first, then fitted again with
     // every candidate (the verdict is about the calibrated model).
@@ -1220,8 +1228,13 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
                     // A parameter on a lattice (a cloth's vertex) is screened where its single's
                     // search put it, as the pair's fit holds it: searching the lattice again on
                     // top of each first cost the curtain 32 simulations a first.
+                    // On a model whose every prediction is a costly simulation, a parameter
+                    // searched on a grid is screened where its single's search put it too: the
+                    // bending's eleven starts cost the curtain's drag case 24 simulations of a
+                    // stiff sheet (7 s) on top of its two firsts.
+                    let costly = target.model.costly_predictions();
                     for (p, fitted) in c.params.iter_mut().zip(&r.params) {
-                        if p.is_discrete() {
+                        if p.is_discrete() || (costly && p.grid > 0) {
                             p.initial = fitted.value;
                             p.grid = 0;
                         }
@@ -1233,30 +1246,43 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             let mut second: Option<(Vec<RankedCandidate>, Vec<f64>, &RankedCandidate)> = None;
             let mut not_held_out: Vec<String> = Vec::new();
             // Each first's seconds are screened on top of it, and its best few fitted jointly
-            // with it. (Dropping a first or a second by what the screen on top says it gains
-            // made the motor's brush drop beside Coulomb friction lose to a dead zone beside
-            // it: from 0, a linearised step undersizes Coulomb friction.)
-            for first in firsts {
+            // with it, unless a pair fitted before already leaves only noise and the screen
+            // says they could at best tie ([`fit_pairs`]). (Dropping a first or a second by
+            // what the screen on top says it gains, without a pair at the floor, made the
+            // motor's brush drop beside Coulomb friction lose to a dead zone beside it: from
+            // 0, a linearised step undersizes Coulomb friction.)
+            let mut seconds: Vec<Seconds> = Vec::new();
+            for first in &firsts {
                 if cancelled() {
                     break;
                 }
                 let own = residual_of(&first.candidate.id);
-                let screened = screen_seconds(&target, opts, &pool, first, own);
-                let pair = match second_effect(
-                    &target,
-                    opts,
-                    first,
-                    screened,
-                    reference,
-                    &base_weighted,
-                ) {
-                    Second::Kept(pair, weighted) => Some((pair, weighted, first)),
-                    Second::NotHeldOut(why) => {
-                        not_held_out.push(why);
-                        None
-                    }
-                    Second::None => None,
-                };
+                let mut on_top = screen_seconds(&target, opts, &pool, first, own);
+                on_top.screened.truncate(PAIR_CONFIRM);
+                seconds.push(on_top);
+            }
+            let reference_cost = 0.5 * reference.iter().map(|r| r * r).sum::<f64>();
+            let pairs = if cancelled() {
+                Vec::new()
+            } else {
+                fit_pairs(&target, opts, &judge, &firsts, &seconds, reference_cost)
+            };
+            for (first, pairs) in firsts.iter().copied().zip(&pairs) {
+                if cancelled() {
+                    break;
+                }
+                if pairs.is_empty() {
+                    continue;
+                }
+                let pair =
+                    match second_effect(&target, opts, first, pairs, reference, &base_weighted) {
+                        Second::Kept(pair, weighted) => Some((pair, weighted, first)),
+                        Second::NotHeldOut(why) => {
+                            not_held_out.push(why);
+                            None
+                        }
+                        Second::None => None,
+                    };
                 // The pair with the most evidence over the best single (its gain counts every
                 // parameter the pair adds, so a smoother law with one more parameter does not
                 // win by a hair over the menu's effect).

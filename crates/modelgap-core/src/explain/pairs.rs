@@ -22,6 +22,14 @@ pub(super) enum Second {
 /// reaches, the candidate, and the step.
 pub(super) type Screened = (f64, Candidate, Start);
 
+/// The seconds screened on top of one first ([`screen_seconds`]).
+pub(super) struct Seconds {
+    /// Best first.
+    pub(super) screened: Vec<Screened>,
+    /// Whether discovery, on what the first leaves, found a law where it acts.
+    pub(super) law_on_top: bool,
+}
+
 /// Every other candidate, and the laws discovery finds on what `best` leaves,
 /// screened on top of it (one linearised step each), best first.
 /// `first_weighted`, the first's own weighted residual, spares the screen a
@@ -32,7 +40,7 @@ pub(super) fn screen_seconds(
     candidates: &[Candidate],
     best: &RankedCandidate,
     first_weighted: Option<&[f64]>,
-) -> Vec<Screened> {
+) -> Seconds {
     let first = best.effect();
     // The laws of what the first leaves: the missing effort estimated again with the first
     // built in (a Stribeck dip that Coulomb friction leaves at each reversal).
@@ -65,90 +73,172 @@ pub(super) fn screen_seconds(
         })
         .collect();
     screened.sort_by(|a, b| a.0.total_cmp(&b.0));
-    screened
+    Seconds {
+        screened,
+        law_on_top: !rediscovered.is_empty(),
+    }
 }
 
-/// A second effect on top of `best`: every other candidate fitted jointly
-/// with it (both sets of parameters free, the second started from its own
-/// best fit on top of the first). Returns the pair, ranked, and the joint
-/// residual when the best pair's gain over `reference` (the weighted residual
-/// of the best single effect) is significant and it lowers the held-out error.
-/// `screened`: the seconds [`screen_seconds`] found on top of `best`.
-pub(super) fn second_effect(
+/// A pair of a first and a second effect fitted jointly: the first's part and
+/// the second's (each with the joint cost and weighted residual).
+pub(super) type FittedPair = (Fitted, Fitted);
+
+/// `second` fitted jointly with `best` (both sets of parameters free, the
+/// second started from its screen on top of the first).
+pub(super) fn fit_second(
     target: &Target,
     opts: &ExplainOptions,
     best: &RankedCandidate,
-    mut screened: Vec<Screened>,
-    reference: &[f64],
-    base_weighted: &[f64],
-) -> Second {
+    second: &Screened,
+) -> FittedPair {
+    let (first_c, first_values) = first_of(target, best);
+    let (_, c, start) = second;
+    // The pair is fitted jointly from the first's values and the second's screen.
+    let mut second = screened_fit(c, start.clone());
+    // The calibration is the first's to carry: a second that carried it too would
+    // hold a copy that overrides the first's, and the first's would move nothing
+    // (on Silverbox, six dead parameters in each pair fit of fifteen).
+    if best.calibration.is_some() {
+        let own = second.candidate.params.len() - target.n_calibration(&second.candidate);
+        second.candidate.params.truncate(own);
+        second.values.truncate(own);
+    }
+    let start: Vec<f64> = first_values.iter().chain(&second.values).copied().collect();
+    match fit_pair(target, &first_c, &second.candidate, &start, opts) {
+        Ok((report, weighted)) => {
+            let (a, b) = report.params.split_at(first_c.params.len());
+            let mut first_report = report.clone();
+            first_report.params = a.to_vec();
+            first_report.std_errors = report.std_errors[..a.len()].to_vec();
+            first_report.robust_std_errors = report.robust_std_errors[..a.len()].to_vec();
+            let mut second_report = report.clone();
+            second_report.params = b.to_vec();
+            second_report.std_errors = report.std_errors[a.len()..].to_vec();
+            second_report.robust_std_errors = report.robust_std_errors[a.len()..].to_vec();
+            let f1 = Fitted {
+                candidate: first_c.clone(),
+                values: a.to_vec(),
+                report: Some(first_report),
+                cost: report.cost_after,
+                weighted: weighted.clone(),
+                error: None,
+                screened: false,
+            };
+            let f2 = Fitted {
+                candidate: second.candidate.clone(),
+                values: b.to_vec(),
+                report: Some(second_report),
+                cost: report.cost_after,
+                weighted,
+                error: None,
+                screened: false,
+            };
+            (f1, f2)
+        }
+        Err(e) => {
+            let mut f = failed_clone(&second);
+            f.error = Some(e.to_string());
+            (f, second)
+        }
+    }
+}
+
+/// The pairs fitted first: the two that the screens on top of the firsts promise most.
+const FIRST_PAIRS: usize = 2;
+
+/// Each first's few best `seconds` (screened on top of it) fitted jointly with it, in the
+/// order given. The two pairs the screens promise most are fitted first. When one of them
+/// leaves only what noise leaves, of the rest only those whose screen promises nearly as
+/// much, or that would say it with fewer parameters and promise a fair share of it, are
+/// fitted — and every one on a first beside which discovery sees a law where it acts: a
+/// linearised step on top of a first held at its single fit cannot size a second that the
+/// first must make room for (the motor's brush drop, fitted alone, takes up most of its
+/// Coulomb friction; beside it, Coulomb friction screens at a sixth of what the pair
+/// removes, and discovery finds its sign law). The others could at best tie, and each fit
+/// costs tens of simulations of a costly model (the curtain's drag: damping beside a wind,
+/// 44 simulations, and three pairs more, where its skin friction beside air drag was at
+/// the floor and the cloth offers no estimate to look with). Otherwise all are fitted.
+pub(super) fn fit_pairs(
+    target: &Target,
+    opts: &ExplainOptions,
+    judge: &Judge,
+    firsts: &[&RankedCandidate],
+    seconds: &[Seconds],
+    reference_cost: f64,
+) -> Vec<Vec<FittedPair>> {
+    let looked: Vec<bool> = seconds.iter().map(|s| s.law_on_top).collect();
+    let seconds: Vec<&[Screened]> = seconds.iter().map(|s| s.screened.as_slice()).collect();
+    let mut order: Vec<(usize, usize)> = (seconds.iter().enumerate())
+        .flat_map(|(f, s)| (0..s.len()).map(move |i| (f, i)))
+        .collect();
+    order.sort_by(|a, b| seconds[a.0][a.1].0.total_cmp(&seconds[b.0][b.1].0));
+    let fit =
+        |&(f, i): &(usize, usize)| ((f, i), fit_second(target, opts, firsts[f], &seconds[f][i]));
+    let (one, two) = order.split_at(order.len().min(FIRST_PAIRS));
+    let mut fitted: Vec<((usize, usize), FittedPair)> = one.par_iter().map(fit).collect();
+    let settled = (fitted.iter())
+        .filter(|(_, (_, b))| {
+            b.error.is_none()
+                && b.cost < reference_cost
+                && all_at_floor(&judge.judge(&b.weighted), opts.floor_factor)
+        })
+        .min_by(|a, b| a.1.1.cost.total_cmp(&b.1.1.cost));
+    let size = |(f, i): (usize, usize)| {
+        let c = &seconds[f][i].1;
+        firsts[f].candidate.params.len() + c.params.len() - target.n_calibration(c)
+    };
+    let rest: Vec<(usize, usize)> = match settled {
+        Some(&(at, (_, ref b))) => {
+            let gained = reference_cost - b.cost;
+            let promised = |(f, i): (usize, usize)| reference_cost - seconds[f][i].0;
+            (two.iter().copied())
+                .filter(|&p| {
+                    looked[p.0]
+                        || promised(p) >= NEAR_SHARE * gained
+                        || (size(p) < size(at) && promised(p) >= CONFIRM_SHARE * gained)
+                })
+                .collect()
+        }
+        None => two.to_vec(),
+    };
+    fitted.extend(rest.par_iter().map(fit).collect::<Vec<_>>());
+    fitted.sort_by_key(|(at, _)| *at);
+    let mut out: Vec<Vec<FittedPair>> = seconds.iter().map(|_| Vec::new()).collect();
+    for ((f, _), pair) in fitted {
+        out[f].push(pair);
+    }
+    out
+}
+
+/// The first with the model's free parameters, as it was confirmed, and its values: the
+/// pair re-fits the calibration too (held at the calibrated values, a mass "changing" 3 ms
+/// into Silverbox's record re-calibrated the mass beside the cubic spring).
+fn first_of(target: &Target, best: &RankedCandidate) -> (Candidate, Vec<f64>) {
     let first = best.effect();
-    // The first with the model's free parameters, as it was confirmed: the pair re-fits the
-    // calibration too (held at the calibrated values, a mass "changing" 3 ms into
-    // Silverbox's record re-calibrated the mass beside the cubic spring).
-    let (first_c, first_values) = match &best.calibration {
+    match &best.calibration {
         Some(cal) => (
             target.joint(&prepared(&first.candidate, target.rec)),
             first.values.iter().chain(&cal.values).copied().collect(),
         ),
         None => (prepared(&first.candidate, target.rec), first.values.clone()),
-    };
+    }
+}
+
+/// A second effect on top of `best`, of the `pairs` fitted with it ([`fit_second`]).
+/// Returns the pair, ranked, and the joint residual when the best pair's gain over
+/// `reference` (the weighted residual of the best single effect) is significant and it
+/// lowers the held-out error.
+pub(super) fn second_effect(
+    target: &Target,
+    opts: &ExplainOptions,
+    best: &RankedCandidate,
+    pairs: &[FittedPair],
+    reference: &[f64],
+    base_weighted: &[f64],
+) -> Second {
+    let first = best.effect();
+    let (first_c, first_values) = first_of(target, best);
     let reference_cost = 0.5 * reference.iter().map(|r| r * r).sum::<f64>();
-    // The best few of the screen on top of the first, fitted jointly with it.
-    screened.truncate(PAIR_CONFIRM);
-    let pairs: Vec<(Fitted, Fitted)> = screened
-        .into_par_iter()
-        .map(|(_, c, start)| {
-            // The pair is fitted jointly from the first's values and the second's screen.
-            let mut second = screened_fit(&c, start);
-            // The calibration is the first's to carry: a second that carried it too would
-            // hold a copy that overrides the first's, and the first's would move nothing
-            // (on Silverbox, six dead parameters in each pair fit of fifteen).
-            if best.calibration.is_some() {
-                let own = second.candidate.params.len() - target.n_calibration(&second.candidate);
-                second.candidate.params.truncate(own);
-                second.values.truncate(own);
-            }
-            let start: Vec<f64> = first_values.iter().chain(&second.values).copied().collect();
-            match fit_pair(target, &first_c, &second.candidate, &start, opts) {
-                Ok((report, weighted)) => {
-                    let (a, b) = report.params.split_at(first_c.params.len());
-                    let mut first_report = report.clone();
-                    first_report.params = a.to_vec();
-                    first_report.std_errors = report.std_errors[..a.len()].to_vec();
-                    first_report.robust_std_errors = report.robust_std_errors[..a.len()].to_vec();
-                    let mut second_report = report.clone();
-                    second_report.params = b.to_vec();
-                    second_report.std_errors = report.std_errors[a.len()..].to_vec();
-                    second_report.robust_std_errors = report.robust_std_errors[a.len()..].to_vec();
-                    let f1 = Fitted {
-                        candidate: first_c.clone(),
-                        values: a.to_vec(),
-                        report: Some(first_report),
-                        cost: report.cost_after,
-                        weighted: weighted.clone(),
-                        error: None,
-                        screened: false,
-                    };
-                    let f2 = Fitted {
-                        candidate: second.candidate.clone(),
-                        values: b.to_vec(),
-                        report: Some(second_report),
-                        cost: report.cost_after,
-                        weighted,
-                        error: None,
-                        screened: false,
-                    };
-                    (f1, f2)
-                }
-                Err(e) => {
-                    let mut f = failed_clone(&second);
-                    f.error = Some(e.to_string());
-                    (f, second)
-                }
-            }
-        })
-        .collect();
     // Each pair's evidence over the best single, its second effect's parameters counted; a
     // discovered law must beat a named effect of the menu by the significance margin.
     let gain_of = |joint_first: &Fitted, second: &Fitted| {
