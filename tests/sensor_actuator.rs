@@ -177,6 +177,11 @@ fn chain_effects_on_places_the_model_lacks_are_refused() {
             "no source 'pump' driven by an input",
         ),
         (
+            "actuator-offset@V",
+            "actuator-offset@Ra",
+            "no source 'Ra' driven by an input",
+        ),
+        (
             "offset@omega",
             "law@shaft:c * 1",
             "'shaft:c * 1' is not a junction of the model",
@@ -244,4 +249,26 @@ fn a_driver_that_follows_its_command_late_is_named_a_lag_of_the_actuator() {
             .all(|r| r.candidate.id != "lag@omega" || r.score < best.score),
         "{text}"
     );
+}
+
+/// A motor driver whose zero is off by 0.4 V with 50 Hz hum of 0.1 V on it (mains pickup
+/// on its reference: not the candidate's constant) is named an offset of the actuator —
+/// not a load, a brush drop or "R is off".
+#[test]
+fn a_driver_whose_zero_is_off_and_hums_is_named_an_offset_of_the_actuator() {
+    let hum = |v: &[f64]| {
+        (v.iter().enumerate())
+            .map(|(k, &x)| {
+                let t = k as f64 * 5e-5;
+                x + 0.4 + 0.1 * (2.0 * std::f64::consts::PI * 50.0 * t).sin()
+            })
+            .collect()
+    };
+    let ex = explained(&driven_recording(hum));
+    let text = modelgap::story::explanation_text(&ex, 6);
+    println!("{text}");
+    let best = ex.chosen.first().expect("an effect is chosen");
+    assert_eq!(best.candidate.id, "actuator-offset@V", "{text}");
+    let b = best.params[0].value;
+    assert!((b / 0.4 - 1.0).abs() < 0.05, "b = {b}\n{text}");
 }

@@ -8,10 +8,11 @@ use super::edit::bad;
 use super::scales::Scales;
 use super::tag::Tag;
 use super::{
-    ActuatorDelay, ActuatorGain, ActuatorLag, ActuatorLimit, Backlash, Brush, Calibration, Cogging,
-    Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault, Faulted, Heating, Inertia,
-    Inflow, Junction, LawEffect, Leak, Load, Node, Orifice, Overflow, PowerLoss, Saturation,
-    SensorClip, SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness, Store, Viscous,
+    ActuatorDelay, ActuatorGain, ActuatorLag, ActuatorLimit, ActuatorOffset, Backlash, Brush,
+    Calibration, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault, Faulted,
+    Heating, Inertia, Inflow, Junction, LawEffect, Leak, Load, Node, Orifice, Overflow, PowerLoss,
+    Saturation, SensorClip, SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness, Store,
+    Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::{BondGraph, ElementId};
@@ -64,6 +65,8 @@ pub enum BondEffect {
     DeadZone(DeadZone),
     /// `gain@<source>`: a gain on what a driven source imposes.
     Gain(ActuatorGain),
+    /// `actuator-offset@<source>`: a constant added to what a driven source imposes.
+    ActuatorOffset(ActuatorOffset),
     /// `limit@<source>`: a driven source that saturates.
     Limit(ActuatorLimit),
     /// `actuator-lag@<source>`: a driven source follows its command through a lag.
@@ -121,6 +124,7 @@ from_kind!(
     DeadZone,
     ActuatorLag,
     ActuatorDelay,
+    ActuatorOffset,
     Declared,
     Calibration
 );
@@ -302,6 +306,9 @@ impl BondEffect {
             Tag::Store => Some(BondEffect::Store(Store { node: node()? })),
             Tag::DeadZone => Some(BondEffect::DeadZone(DeadZone { source: source()? })),
             Tag::Gain => Some(BondEffect::Gain(ActuatorGain { source: source()? })),
+            Tag::ActuatorOffset => Some(BondEffect::ActuatorOffset(ActuatorOffset {
+                source: source()?,
+            })),
             Tag::Limit => Some(BondEffect::Limit(ActuatorLimit { source: source()? })),
             Tag::ActuatorLag => Some(BondEffect::ActuatorLag(ActuatorLag { source: source()? })),
             Tag::ActuatorDelay => Some(BondEffect::ActuatorDelay(ActuatorDelay {
@@ -413,6 +420,7 @@ impl BondEffect {
             BondEffect::Store(k) => k,
             BondEffect::DeadZone(k) => k,
             BondEffect::Gain(k) => k,
+            BondEffect::ActuatorOffset(k) => k,
             BondEffect::Limit(k) => k,
             BondEffect::ActuatorLag(k) => k,
             BondEffect::ActuatorDelay(k) => k,
@@ -453,6 +461,7 @@ impl BondEffect {
             | BondEffect::Store(_)
             | BondEffect::DeadZone(_)
             | BondEffect::Gain(_)
+            | BondEffect::ActuatorOffset(_)
             | BondEffect::Limit(_)
             | BondEffect::ActuatorLag(_)
             | BondEffect::ActuatorDelay(_)
@@ -520,6 +529,7 @@ impl BondEffect {
             Tag::Store => Store::vanishing_values(c),
             Tag::DeadZone => DeadZone::vanishing_values(c),
             Tag::Gain => ActuatorGain::vanishing_values(c),
+            Tag::ActuatorOffset => ActuatorOffset::vanishing_values(c),
             Tag::Limit => ActuatorLimit::vanishing_values(c),
             Tag::ActuatorLag => ActuatorLag::vanishing_values(c),
             Tag::ActuatorDelay => ActuatorDelay::vanishing_values(c),

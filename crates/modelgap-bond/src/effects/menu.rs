@@ -7,10 +7,10 @@ use super::bond_effect::BondEffect;
 use super::def::EffectDef;
 use super::scales::Scales;
 use super::{
-    ActuatorDelay, ActuatorGain, ActuatorLag, ActuatorLimit, Backlash, Brush, Cogging, Coulomb,
-    Coupling, DeadZone, Declared, Deviation, Factor, Fault, Heating, Inertia, Inflow, Leak, Load,
-    Orifice, Overflow, PowerLoss, Saturation, SensorClip, SensorDelay, SensorLag, SensorOffset,
-    SensorScale, Stiffness, Store, Viscous,
+    ActuatorDelay, ActuatorGain, ActuatorLag, ActuatorLimit, ActuatorOffset, Backlash, Brush,
+    Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault, Heating, Inertia,
+    Inflow, Leak, Load, Orifice, Overflow, PowerLoss, Saturation, SensorClip, SensorDelay,
+    SensorLag, SensorOffset, SensorScale, Stiffness, Store, Viscous,
 };
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
@@ -157,6 +157,7 @@ pub fn offered(g: &BondGraph) -> Vec<BondEffect> {
     out.extend(on_nodes.into_iter().map(|(_, e)| e));
     out.extend(of::<DeadZone>(g));
     out.extend(of::<ActuatorGain>(g));
+    out.extend(of::<ActuatorOffset>(g));
     out.extend(of::<ActuatorLimit>(g));
     out.extend(of::<ActuatorLag>(g));
     out.extend(of::<ActuatorDelay>(g));

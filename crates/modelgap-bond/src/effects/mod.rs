@@ -64,7 +64,8 @@
 //!   thermal ones [`power`](PowerLoss) (a loss growing as `|T|^p`: natural
 //!   convection, radiation);
 //! - on a source an input drives, in any domain: [`deadzone`](DeadZone),
-//!   [`gain`](ActuatorGain) (the actuator delivers `k` times its command) and
+//!   [`gain`](ActuatorGain) (the actuator delivers `k` times its command),
+//!   [`actuator-offset`](ActuatorOffset) (its command plus a constant) and
 //!   [`limit`](ActuatorLimit) (it saturates at `±v_max`),
 //!   [`actuator-lag`](ActuatorLag) (it follows its command through a first-order
 //!   lag) and [`actuator-delay`](ActuatorDelay) (a delay behind);
@@ -87,6 +88,7 @@
 
 mod actuator;
 mod backlash;
+mod bias;
 mod bond_effect;
 mod brush;
 mod calibration;
@@ -135,6 +137,7 @@ use crate::simulate::ParamChange;
 
 pub use actuator::{ActuatorDelay, ActuatorLag};
 pub use backlash::Backlash;
+pub use bias::ActuatorOffset;
 pub use bond_effect::{BondEffect, needs_adaptive_steps};
 pub use brush::Brush;
 pub use calibration::Calibration;

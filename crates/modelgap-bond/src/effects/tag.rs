@@ -31,6 +31,7 @@ pub(super) enum Tag {
     Limit,
     ActuatorLag,
     ActuatorDelay,
+    ActuatorOffset,
     Lag,
     Offset,
     Clip,
@@ -42,7 +43,7 @@ pub(super) enum Tag {
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 32] = [
+const PREFIXES: [(Tag, &str); 33] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -67,6 +68,7 @@ const PREFIXES: [(Tag, &str); 32] = [
     (Tag::Limit, "limit@"),
     (Tag::ActuatorLag, "actuator-lag@"),
     (Tag::ActuatorDelay, "actuator-delay@"),
+    (Tag::ActuatorOffset, "actuator-offset@"),
     (Tag::Lag, "lag@"),
     (Tag::Offset, "offset@"),
     (Tag::Clip, "clip@"),
@@ -133,7 +135,7 @@ mod tests {
     fn the_expected_prefixes_read_as_a_list() {
         assert_eq!(
             Tag::expected(),
-            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, backlash@, cogging@, brush@, saturation@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, power@, store@, deadzone@, gain@, limit@, actuator-lag@, actuator-delay@, lag@, offset@, clip@, scale@, delay@, declared: or law@"
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, backlash@, cogging@, brush@, saturation@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, power@, store@, deadzone@, gain@, limit@, actuator-lag@, actuator-delay@, actuator-offset@, lag@, offset@, clip@, scale@, delay@, declared: or law@"
         );
     }
 }
