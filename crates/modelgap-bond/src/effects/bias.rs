@@ -57,12 +57,10 @@ impl EffectDef for ActuatorOffset {
     /// is given), starting at 0, scale a tenth of that.
     fn candidate(&self, g: &BondGraph, scales: &Scales) -> Candidate {
         let el = g.element(self.source);
-        let level = if el.kind == ElementKind::Sf {
-            scales.flow(self.source)
-        } else {
-            scales.effort(self.source)
-        };
-        let peak = level.peak_or(1.0);
+        let peak = DeadZone {
+            source: self.source,
+        }
+        .peak(g, scales);
         Candidate {
             id: Tag::ActuatorOffset.id(&el.name),
             name: format!(

@@ -37,6 +37,18 @@ impl DeadZone {
         (el.kind.is_source() && driven).then_some(DeadZone { source: id })
     }
 
+    /// The largest value the source imposed over the run the scales come from (a
+    /// recording's inputs, never an input's default when a recording is given); 1
+    /// when it imposed nothing.
+    pub(super) fn peak(self, g: &BondGraph, scales: &Scales) -> f64 {
+        let level = if g.element(self.source).kind == ElementKind::Sf {
+            scales.flow(self.source)
+        } else {
+            scales.effort(self.source)
+        };
+        level.peak_or(1.0)
+    }
+
     /// The unit of what the source imposes: the unit of the input it names
     /// when the law is that input alone, else `e` or `f`.
     pub(super) fn unit(self, g: &BondGraph) -> String {
@@ -66,12 +78,7 @@ impl EffectDef for DeadZone {
     /// a recording is given), starting at 0, scale a tenth of that.
     fn candidate(&self, g: &BondGraph, scales: &Scales) -> Candidate {
         let el = g.element(self.source);
-        let level = if el.kind == ElementKind::Sf {
-            scales.flow(self.source)
-        } else {
-            scales.effort(self.source)
-        };
-        let peak = level.peak_or(1.0);
+        let peak = self.peak(g, scales);
         Candidate {
             id: Tag::DeadZone.id(&el.name),
             name: format!(

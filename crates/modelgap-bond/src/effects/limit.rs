@@ -11,7 +11,7 @@ use super::edit::{bad, ident, law, new_param};
 use super::menu::element_place;
 use super::scales::Scales;
 use super::tag::Tag;
-use crate::element::{ElementKind, Law};
+use crate::element::Law;
 use crate::error::Result;
 use crate::graph::{BondGraph, ElementId};
 use crate::simulate::ParamChange;
@@ -48,12 +48,10 @@ impl EffectDef for ActuatorLimit {
     /// does nothing; eight grid starts across.
     fn candidate(&self, g: &BondGraph, scales: &Scales) -> Candidate {
         let el = g.element(self.source);
-        let level = if el.kind == ElementKind::Sf {
-            scales.flow(self.source)
-        } else {
-            scales.effort(self.source)
-        };
-        let peak = level.peak_or(1.0);
+        let peak = DeadZone {
+            source: self.source,
+        }
+        .peak(g, scales);
         Candidate {
             id: Tag::Limit.id(&el.name),
             name: format!(
