@@ -458,23 +458,8 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
             num(o.noise_floor),
             o.rms_after / o.noise_floor
         );
-        if let Some(j) = o.judgement.as_ref().filter(|j| j.coloured) {
-            let _ = writeln!(
-                s,
-                "           taken for coloured noise of σ {} {} (correlation time {} samples, \
-                 uncorrelated with the inputs, unbiased): the white floor sees only its fast part",
-                num(j.noise_sigma),
-                o.unit,
-                num(j.correlation_samples)
-            );
-        }
-        if let Some(q) = o.judgement.as_ref().and_then(|j| j.quantum) {
-            let _ = writeln!(
-                s,
-                "           quantised in steps of {} {}: the floor includes their rounding error",
-                num(q),
-                o.unit
-            );
+        for note in floor_notes(o) {
+            let _ = writeln!(s, "           {note}");
         }
         if ex.verdict == Verdict::Partial && !o.remaining_windows.is_empty() {
             let w: Vec<String> = crate::residual::largest_windows(&o.remaining_windows, 5)
@@ -496,6 +481,30 @@ pub fn explanation_text(ex: &Explanation, top: usize) -> String {
         let _ = writeln!(s, "warning: {w}");
     }
     wrap_text(&s, TEXT_WIDTH)
+}
+
+/// What the judge made of an output's residual after the chosen effects beyond its RMS,
+/// for the text and the page alike: taken for coloured noise above the white floor (and
+/// why that is accepted), quantised.
+fn floor_notes(o: &crate::explain::OutputSummary) -> Vec<String> {
+    let mut notes = Vec::new();
+    if let Some(j) = o.judgement.as_ref().filter(|j| j.coloured) {
+        notes.push(format!(
+            "taken for coloured noise of σ {}{} (correlation time {} samples, uncorrelated \
+             with the inputs, unbiased): the white floor sees only its fast part",
+            num(j.noise_sigma),
+            unit_suffix(&o.unit),
+            num(j.correlation_samples)
+        ));
+    }
+    if let Some(q) = o.judgement.as_ref().and_then(|j| j.quantum) {
+        notes.push(format!(
+            "quantised in steps of {}{}: the floor includes their rounding error",
+            num(q),
+            unit_suffix(&o.unit)
+        ));
+    }
+    notes
 }
 
 /// "[signature disagrees] measured i above the model …": the qualitative check of a
@@ -619,6 +628,12 @@ pub fn build_report(
                     format!(", still leaving its band in {} window(s)", o.windows.len())
                 }
             ));
+        }
+    }
+    // Why a residual above the white floor was accepted (the text says it too).
+    for o in explanation.iter().flat_map(|ex| &ex.outputs) {
+        for note in floor_notes(o) {
+            summary.push(format!("{}: the residual left is {note}.", o.name));
         }
     }
     let series = before
@@ -971,6 +986,43 @@ mod tests {
         assert_eq!(wrap_text("a b c\n", 4), "a b\n  c\n");
         // A number keeps its percent sign.
         assert_eq!(wrap_text("ab 12 %\n", 5), "ab 12 %\n");
+    }
+
+    // The CLI's text said why a residual 2.9× the white floor was accepted (coloured noise);
+    // the report page did not.
+    #[test]
+    fn a_residual_taken_for_coloured_noise_is_said_so_in_the_text_and_on_the_page() {
+        let rec = recording();
+        let mut ex = explain(&Bounded, &rec, &ExplainOptions::default()).unwrap();
+        let o = &mut ex.outputs[0];
+        let j = o.judgement.as_mut().expect("judged");
+        j.coloured = true;
+        j.noise_sigma = 0.029;
+        j.correlation_samples = 14.0;
+        j.quantum = Some(0.2);
+        let text = explanation_text(&ex, 3).replace('\n', " ");
+        let words = |s: &str| s.split_whitespace().collect::<Vec<_>>().join(" ");
+        let text = words(&text);
+        assert!(
+            text.contains("taken for coloured noise of σ 0.029 (correlation time 14 samples"),
+            "{text}"
+        );
+        // No space before the colon where the output has no unit.
+        assert!(
+            text.contains("quantised in steps of 0.2: the floor"),
+            "{text}"
+        );
+        let before = compare(&Bounded, &rec, &CompareOptions::default()).unwrap();
+        let report = build_report(&before, Some(&ex), None);
+        let page = report.summary_html_paragraphs.join(" ");
+        assert!(
+            page.contains("y: the residual left is taken for coloured noise of σ 0.029 ("),
+            "{page}"
+        );
+        assert!(
+            page.contains("y: the residual left is quantised in steps of 0.2:"),
+            "{page}"
+        );
     }
 
     // Issue 16: fits that ended on a bound (beta = 5e-5 at 5× nominal) showed no ± and no
