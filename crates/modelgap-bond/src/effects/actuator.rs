@@ -19,9 +19,9 @@
 
 use modelgap_core::{Candidate, EffectKind, EffectParam};
 
-use super::deadzone::DeadZone;
+use super::deadzone::{DeadZone, source_value};
 use super::def::EffectDef;
-use super::edit::{added, bad, ident, new_param};
+use super::edit::{added, ident, new_param};
 use super::lag::{Stage, lag_stage_at};
 use super::menu::element_place;
 use super::scales::Scales;
@@ -73,19 +73,6 @@ fn interval_and_length(scales: &Scales) -> (f64, f64) {
     (dt, length)
 }
 
-/// The command the source at `id` follows: its value's expression.
-fn command(g: &BondGraph, id: ElementId, c: &Candidate) -> Result<(String, Expr)> {
-    let el = g.element(id);
-    match &el.law {
-        Law::Source(v) => Ok((el.name.clone(), v.clone())),
-        _ => Err(bad(
-            c,
-            "",
-            format!("'{}' is not a source with a command to follow", el.name),
-        )),
-    }
-}
-
 impl EffectDef for ActuatorLag {
     fn offers(g: &BondGraph) -> Vec<ActuatorLag> {
         g.element_ids()
@@ -115,7 +102,7 @@ impl EffectDef for ActuatorLag {
 
     /// The source's value becomes the lag stage's output, the stage following `v`.
     fn edit(&self, g: &mut BondGraph, c: &Candidate, values: &[f64]) -> Result<Vec<ParamChange>> {
-        let (name, v) = command(g, self.source, c)?;
+        let (name, v) = source_value(g, self.source, c, "to follow late")?;
         let tau = new_param(
             g,
             &format!("tau_act_{}", ident(&name)),
@@ -158,7 +145,7 @@ impl EffectDef for ActuatorDelay {
 
     /// The source's value becomes `2 u − v`, `u` a lag of `d/2` following `v`.
     fn edit(&self, g: &mut BondGraph, c: &Candidate, values: &[f64]) -> Result<Vec<ParamChange>> {
-        let (name, v) = command(g, self.source, c)?;
+        let (name, v) = source_value(g, self.source, c, "to follow late")?;
         let d = new_param(
             g,
             &format!("delay_act_{}", ident(&name)),

@@ -9,9 +9,9 @@
 
 use modelgap_core::{Candidate, EffectKind, EffectParam};
 
-use super::deadzone::DeadZone;
+use super::deadzone::{DeadZone, source_value};
 use super::def::{EffectDef, all_zero};
-use super::edit::{added, bad, ident, law, new_param};
+use super::edit::{added, ident, law, new_param};
 use super::junction::Junction;
 use super::load::Load;
 use super::menu::element_place;
@@ -84,14 +84,7 @@ impl EffectDef for ActuatorOffset {
 
     /// The source's law `v` becomes `(v) + b`.
     fn edit(&self, g: &mut BondGraph, c: &Candidate, values: &[f64]) -> Result<Vec<ParamChange>> {
-        let target = g.element(self.source).name.clone();
-        let Law::Source(v) = g.element(self.source).law.clone() else {
-            return Err(bad(
-                c,
-                "",
-                format!("'{target}' is not a source with a value to offset"),
-            ));
-        };
+        let (target, v) = source_value(g, self.source, c, "to offset")?;
         let unit = DeadZone {
             source: self.source,
         }

@@ -66,6 +66,25 @@ impl DeadZone {
     }
 }
 
+/// The name of the source at `id` and the value it imposes, for an edit of `c` that reshapes
+/// that value (`what`: "to offset", "to scale"); an error naming it when it is no source.
+pub(super) fn source_value(
+    g: &BondGraph,
+    id: ElementId,
+    c: &Candidate,
+    what: &str,
+) -> Result<(String, Expr)> {
+    let el = g.element(id);
+    match &el.law {
+        Law::Source(v) => Ok((el.name.clone(), v.clone())),
+        _ => Err(bad(
+            c,
+            "",
+            format!("'{}' is not a source with a value {what}", el.name),
+        )),
+    }
+}
+
 impl EffectDef for DeadZone {
     fn offers(g: &BondGraph) -> Vec<DeadZone> {
         g.element_ids()
@@ -99,14 +118,7 @@ impl EffectDef for DeadZone {
 
     /// The source's law `v` becomes `sign(v) * max(abs(v) - delta, 0)`.
     fn edit(&self, g: &mut BondGraph, c: &Candidate, values: &[f64]) -> Result<Vec<ParamChange>> {
-        let target = g.element(self.source).name.clone();
-        let Law::Source(v) = g.element(self.source).law.clone() else {
-            return Err(bad(
-                c,
-                "",
-                format!("'{target}' is not a source with a value to put a dead zone in"),
-            ));
-        };
+        let (target, v) = source_value(g, self.source, c, "to put a dead zone in")?;
         let unit = self.unit(g);
         let delta = new_param(
             g,

@@ -6,9 +6,9 @@
 
 use modelgap_core::{Candidate, EffectKind, EffectParam};
 
-use super::deadzone::DeadZone;
+use super::deadzone::{DeadZone, source_value};
 use super::def::EffectDef;
-use super::edit::{bad, ident, law, new_param};
+use super::edit::{ident, law, new_param};
 use super::menu::element_place;
 use super::scales::Scales;
 use super::tag::Tag;
@@ -55,14 +55,7 @@ impl EffectDef for ActuatorGain {
 
     /// The source's law `v` becomes `k * (v)`.
     fn edit(&self, g: &mut BondGraph, c: &Candidate, values: &[f64]) -> Result<Vec<ParamChange>> {
-        let target = g.element(self.source).name.clone();
-        let Law::Source(v) = g.element(self.source).law.clone() else {
-            return Err(bad(
-                c,
-                "",
-                format!("'{target}' is not a source with a value to scale"),
-            ));
-        };
+        let (target, v) = source_value(g, self.source, c, "to scale")?;
         let k = new_param(
             g,
             &format!("k_{}", ident(&target)),

@@ -6,8 +6,9 @@
 use modelgap_core::{Candidate, EffectKind, EffectParam};
 
 use super::DeadZone;
+use super::deadzone::source_value;
 use super::def::EffectDef;
-use super::edit::{bad, ident, law, new_param};
+use super::edit::{ident, law, new_param};
 use super::menu::element_place;
 use super::scales::Scales;
 use super::tag::Tag;
@@ -78,14 +79,7 @@ impl EffectDef for ActuatorLimit {
 
     /// The source's law `v` becomes `sign(v) * min(abs(v), v_max)`.
     fn edit(&self, g: &mut BondGraph, c: &Candidate, values: &[f64]) -> Result<Vec<ParamChange>> {
-        let target = g.element(self.source).name.clone();
-        let Law::Source(v) = g.element(self.source).law.clone() else {
-            return Err(bad(
-                c,
-                "",
-                format!("'{target}' is not a source with a value to limit"),
-            ));
-        };
+        let (target, v) = source_value(g, self.source, c, "to limit")?;
         let unit = DeadZone {
             source: self.source,
         }
