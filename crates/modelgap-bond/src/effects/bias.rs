@@ -57,10 +57,10 @@ impl EffectDef for ActuatorOffset {
     /// is given), starting at 0, scale a tenth of that.
     fn candidate(&self, g: &BondGraph, scales: &Scales) -> Candidate {
         let el = g.element(self.source);
-        let peak = DeadZone {
+        let driven = DeadZone {
             source: self.source,
-        }
-        .peak(g, scales);
+        };
+        let peak = driven.peak(g, scales);
         Candidate {
             id: Tag::ActuatorOffset.id(&el.name),
             name: format!(
@@ -71,10 +71,7 @@ impl EffectDef for ActuatorOffset {
             acts_on: el.name.clone(),
             params: vec![EffectParam::new(
                 "b",
-                DeadZone {
-                    source: self.source,
-                }
-                .unit(g),
+                driven.unit(g),
                 0.0,
                 (-peak, peak),
                 0.1 * peak,

@@ -1219,6 +1219,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             // The second effect is sought among the singles that showed evidence of their
             // own (the best few, and every law discovery found): a candidate that explains
             // nothing alone rarely explains the rest, and each try costs two fits.
+            let costly = target.model.costly_predictions();
             let pool: Vec<Candidate> = (ranking.iter())
                 .filter(|r| r.error.is_none() && r.cost < cost_before)
                 .enumerate()
@@ -1232,7 +1233,6 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
                     // searched on a grid is screened where its single's search put it too: the
                     // bending's eleven starts cost the curtain's drag case 24 simulations of a
                     // stiff sheet (7 s) on top of its two firsts.
-                    let costly = target.model.costly_predictions();
                     for (p, fitted) in c.params.iter_mut().zip(&r.params) {
                         if p.is_discrete() || (costly && p.grid > 0) {
                             p.initial = fitted.value;
