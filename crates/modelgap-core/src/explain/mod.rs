@@ -1244,7 +1244,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
                 .collect();
             // The best pair, its weighted residual and the first it was built on.
             let mut second: Option<(Vec<RankedCandidate>, Vec<f64>, &RankedCandidate)> = None;
-            let mut not_held_out: Vec<String> = Vec::new();
+            let mut not_added: Vec<String> = Vec::new();
             // Each first's seconds are screened on top of it, and its best few fitted jointly
             // with it, unless a pair fitted before already leaves only noise and the screen
             // says they could at best tie ([`fit_pairs`]). (Dropping a first or a second by
@@ -1267,6 +1267,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
             } else {
                 fit_pairs(&target, opts, &judge, &firsts, &seconds, reference_cost)
             };
+            let floors: Vec<f64> = judge.floors.iter().map(|f| f.sigma).collect();
             for (first, pairs) in firsts.iter().copied().zip(&pairs) {
                 if cancelled() {
                     break;
@@ -1274,15 +1275,22 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
                 if pairs.is_empty() {
                     continue;
                 }
-                let pair =
-                    match second_effect(&target, opts, first, pairs, reference, &base_weighted) {
-                        Second::Kept(pair, weighted) => Some((pair, weighted, first)),
-                        Second::NotHeldOut(why) => {
-                            not_held_out.push(why);
-                            None
-                        }
-                        Second::None => None,
-                    };
+                let pair = match second_effect(
+                    &target,
+                    opts,
+                    first,
+                    pairs,
+                    reference,
+                    &base_weighted,
+                    &floors,
+                ) {
+                    Second::Kept(pair, weighted) => Some((pair, weighted, first)),
+                    Second::NotAdded(why) => {
+                        not_added.push(why);
+                        None
+                    }
+                    Second::None => None,
+                };
                 // The pair with the most evidence over the best single (its gain counts every
                 // parameter the pair adds, so a smoother law with one more parameter does not
                 // win by a hair over the menu's effect).
@@ -1336,7 +1344,7 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
                 after_weighted = weighted;
                 judged_after = judge.judge(&after_weighted);
             } else {
-                reasons.extend(not_held_out.into_iter().take(1));
+                reasons.extend(not_added.into_iter().take(1));
             }
         }
         // The first effect holds too: fitted on either half, it predicts the other half

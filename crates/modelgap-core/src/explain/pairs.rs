@@ -1,7 +1,8 @@
 //! Second effects: what the first effect leaves. The laws discovery finds
 //! again with the first built in ([`laws_on_top`]), every candidate screened
 //! on top of it, the best few fitted jointly with it, and the pair kept only
-//! when it is significant and lowers the held-out error: fitted on either half
+//! when it is significant, moves some prediction by as much as the noise
+//! ([`MATERIAL_MOVE`]), and lowers the held-out error: fitted on either half
 //! of the recording, it predicts the other half better than the first alone
 //! ([`second_effect`], [`super::heldout`]).
 
@@ -11,9 +12,10 @@ use super::*;
 pub(super) enum Second {
     /// The pair, ranked, and its joint weighted residual.
     Kept(Vec<RankedCandidate>, Vec<f64>),
-    /// The best pair is significant in the recording but does not lower the
-    /// held-out error: why, for the verdict's reasons.
-    NotHeldOut(String),
+    /// The best pair is significant in the recording but not added (it does
+    /// not lower the held-out error, or moves no prediction by as much as the
+    /// noise): why, for the verdict's reasons.
+    NotAdded(String),
     /// No pair is significant.
     None,
 }
@@ -227,8 +229,9 @@ fn first_of(target: &Target, best: &RankedCandidate) -> (Candidate, Vec<f64>) {
 
 /// A second effect on top of `best`, of the `pairs` fitted with it ([`fit_second`]).
 /// Returns the pair, ranked, and the joint residual when the best pair's gain over
-/// `reference` (the weighted residual of the best single effect) is significant and it
-/// lowers the held-out error.
+/// `reference` (the weighted residual of the best single effect) is significant, it moves
+/// some output's prediction by as much as its floor (`floors`, σ in the outputs' units:
+/// [`MATERIAL_MOVE`]) and it lowers the held-out error.
 pub(super) fn second_effect(
     target: &Target,
     opts: &ExplainOptions,
@@ -236,6 +239,7 @@ pub(super) fn second_effect(
     pairs: &[FittedPair],
     reference: &[f64],
     base_weighted: &[f64],
+    floors: &[f64],
 ) -> Second {
     let first = best.effect();
     let (first_c, first_values) = first_of(target, best);
@@ -290,6 +294,26 @@ pub(super) fn second_effect(
     if gain <= opts.significance {
         return Second::None;
     }
+    // A second must matter: an effect that nowhere moves any output's prediction by as
+    // much as its noise is taking up a model error it does not explain, however many
+    // samples it averages over (beside a first that leaves a hum or stands for two
+    // stages, an inertia changed by 0.06 % moved the speed by at most 0.6 σ while lowering
+    // the error significantly; every second that is the physics moved it by 4 σ or more).
+    let mut single = vec![0.0; target.n_residuals()];
+    if target
+        .residuals(&[(&first_c, first_values.as_slice())], &mut single)
+        .is_ok()
+    {
+        let moved = largest_move(target, floors, &single, &joint_first.weighted);
+        if let Some((j, peak)) = moved.filter(|&(_, p)| p < MATERIAL_MOVE) {
+            return Second::NotAdded(format!(
+                "a second effect, {} ({}), lowers the error but nowhere moves a prediction by \
+                 as much as the noise (at most {peak:.2} σ, on `{}`): it is too small to \
+                 matter and is not added",
+                second.candidate.id, second.candidate.name, target.names[j]
+            ));
+        }
+    }
     // A change at the record's edge acts in one half only, where it cannot be told from the
     // start's state or from a constant: the halves cannot test it, and nothing else can
     // (Silverbox's linear stiffness "changing" 4.3 ms into the record beside the cubic,
@@ -302,7 +326,7 @@ pub(super) fn second_effect(
         .iter()
         .find_map(|(c, v)| heldout::edge_time(c, v, target.rec).map(|t| (c, t)))
     {
-        return Second::NotHeldOut(format!(
+        return Second::NotAdded(format!(
             "a pair of effects, {} with {}, holds {} ({}) changing at {t:.4} s, at the \
              record's edge, where a change cannot be told from the initial state or a \
              constant, and the halves cannot test it: it is not added",
@@ -329,7 +353,7 @@ pub(super) fn second_effect(
         match check {
             Some(h) if h.lowers() => h,
             Some(h) => {
-                return Second::NotHeldOut(format!(
+                return Second::NotAdded(format!(
                     "a second effect, {} ({}), lowers the error of the whole recording but \
                      not the held-out error (fitted on one half, measured on the other: {}): \
                      it is not added",
@@ -339,7 +363,7 @@ pub(super) fn second_effect(
                 ));
             }
             None => {
-                return Second::NotHeldOut(format!(
+                return Second::NotAdded(format!(
                     "a second effect, {}, could not be checked on held-out data (a \
                      simulation failed): it is not added",
                     second.candidate.id
@@ -385,4 +409,36 @@ pub(super) fn laws_on_top(target: &Target, best: &RankedCandidate) -> Vec<Candid
         .flat_map(|m| screen::screen_laws(m, linear))
         .filter_map(|l| target.model.law_candidate(&l))
         .collect()
+}
+
+/// A second effect must move some output's prediction, somewhere in the record, by at
+/// least this many times the output's noise floor (σ) to be added (dimensionless).
+/// Measured on every pair of the batteries: the seconds that are the physics move a
+/// prediction by 4 σ to 1600 σ, the ones that take up a model error beside the first
+/// (a 0.06 % inertia beside a driver's hum or a single lag for two) by 0.45–0.6 σ.
+const MATERIAL_MOVE: f64 = 1.0;
+
+/// The output whose prediction the pair moves most from what the first alone predicts,
+/// and by how much at most over the record, in units of that output's floor (`floors`,
+/// in the outputs' units; `single` and `pair` weighted residuals).
+fn largest_move(
+    target: &Target,
+    floors: &[f64],
+    single: &[f64],
+    pair: &[f64],
+) -> Option<(usize, f64)> {
+    let n = target.rec.len();
+    (floors.iter().enumerate())
+        .filter(|(_, floor)| **floor > 0.0)
+        .map(|(j, floor)| {
+            let a = &single[j * n..(j + 1) * n];
+            let b = &pair[j * n..(j + 1) * n];
+            let peak = a
+                .iter()
+                .zip(b)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
+            (j, peak * target.sigma[j] / floor)
+        })
+        .max_by(|x, y| x.1.total_cmp(&y.1))
 }
