@@ -30,26 +30,40 @@ fn recording(truth: &str, sensor: impl Fn(&[f64]) -> Vec<f64>) -> Recording {
         values: v,
         hold: Hold::Zero,
     };
-    noisy(truth, drive, sensor, 17)
+    noisy(truth, command, drive, sensor, 17)
 }
 
 /// The motor driven by [`command`] through `driver` (given the command on a 20 kHz grid,
 /// it returns what is delivered there); the recording holds the command, as a controller
 /// logs it.
 fn driven_recording(driver: impl Fn(&[f64]) -> Vec<f64>) -> Recording {
+    driven_by(command, driver, 23)
+}
+
+/// The motor commanded `cmd` through `driver` (as [`driven_recording`]), noise seeded `seed`.
+/// The controller sets its command every sample (1 ms) and holds it, as a digital one does.
+fn driven_by(cmd: fn(f64) -> f64, driver: impl Fn(&[f64]) -> Vec<f64>, seed: u64) -> Recording {
     let fine: Vec<f64> = (0..80_000).map(|k| k as f64 * 5e-5).collect();
-    let delivered = driver(&fine.iter().map(|&t| command(t)).collect::<Vec<_>>());
+    let held = |t: f64| cmd((t / 1e-3 + 1e-9).floor() * 1e-3);
+    let delivered = driver(&fine.iter().map(|&t| held(t)).collect::<Vec<_>>());
     let drive = Drive::Sampled {
         t: fine,
         values: delivered,
         hold: Hold::Linear,
     };
-    noisy(MOTOR, drive, <[f64]>::to_vec, 23)
+    noisy(MOTOR, cmd, drive, <[f64]>::to_vec, seed)
 }
 
 /// `truth` simulated 4 s at 1 kHz with `drive` as its voltage, `omega` through `sensor`, white
-/// noise (0.01 A, 0.2 rad/s, seeded) on both outputs, and the commanded voltage recorded.
-fn noisy(truth: &str, drive: Drive, sensor: impl Fn(&[f64]) -> Vec<f64>, seed: u64) -> Recording {
+/// noise (0.01 A, 0.2 rad/s, seeded) on both outputs, and the commanded voltage `cmd`
+/// recorded.
+fn noisy(
+    truth: &str,
+    cmd: fn(f64) -> f64,
+    drive: Drive,
+    sensor: impl Fn(&[f64]) -> Vec<f64>,
+    seed: u64,
+) -> Recording {
     let g = read_model(truth).unwrap();
     let t: Vec<f64> = (0..4000).map(|k| k as f64 * 1e-3).collect();
     let run = simulate(
@@ -64,7 +78,7 @@ fn noisy(truth: &str, drive: Drive, sensor: impl Fn(&[f64]) -> Vec<f64>, seed: u
         |y: &[f64], s: f64| -> Vec<f64> { y.iter().map(|x| x + s * gauss.sample()).collect() };
     let i = noisy(run.output("i").unwrap(), 0.01);
     let omega = noisy(&sensor(run.output("omega").unwrap()), 0.2);
-    let v = t.iter().map(|&t| command(t)).collect();
+    let v = t.iter().map(|&t| cmd(t)).collect();
     Recording::new(
         t,
         vec![
@@ -281,4 +295,43 @@ fn a_driver_whose_zero_is_off_and_hums_is_named_an_offset_of_the_actuator() {
         ex.reasons.iter().any(|r| r.contains("too small to matter")),
         "{text}"
     );
+}
+
+/// A smooth, rich command: two sines, ±12 V at most, that visit every level.
+fn smooth_command(t: f64) -> f64 {
+    let tau = std::f64::consts::TAU;
+    8.0 * (tau * 0.6 * t).sin() + 4.0 * (tau * 1.7 * t + 1.0).sin()
+}
+
+/// A driver whose converter truncates its command to steps of 0.47 V (`q ⌊v/q⌋`: not the
+/// rounding of the library's term, whose steps are centred on the levels) is found as
+/// the steps of a quantised input at the electrical loop, with its step within 5 % —
+/// not as "R is off", a gain or an offset.
+#[test]
+fn a_driver_that_delivers_its_command_in_steps_is_named_with_its_step() {
+    let q = 0.47;
+    let truncate = |v: &[f64]| v.iter().map(|&x| q * (x / q).floor()).collect();
+    let ex = explained(&driven_by(smooth_command, truncate, 29));
+    let text = modelgap::story::explanation_text(&ex, 6);
+    println!("{text}");
+    let best = ex.chosen.first().expect("an effect is chosen");
+    assert!(best.candidate.id.starts_with("law@1e:"), "{text}");
+    assert!(best.candidate.id.contains("quantise(V"), "{text}");
+    let step = (best.params.iter())
+        .find(|p| p.name.starts_with("q"))
+        .expect("the step is a parameter")
+        .value;
+    assert!((step / q - 1.0).abs() < 0.05, "step {step}\n{text}");
+    assert_eq!(ex.verdict, modelgap::Verdict::EffectFound, "{text}");
+}
+
+/// The same rich command delivered as it is: nothing is missing, and no step is read
+/// into the noise.
+#[test]
+fn a_driver_that_delivers_a_rich_command_as_it_is_gets_nothing_missing() {
+    for seed in [29, 31, 37] {
+        let ex = explained(&driven_by(smooth_command, <[f64]>::to_vec, seed));
+        let text = modelgap::story::explanation_text(&ex, 6);
+        assert_eq!(ex.verdict, modelgap::Verdict::NothingMissing, "{text}");
+    }
 }

@@ -315,7 +315,7 @@ fn time_derivative(e: &Expr) -> Option<Expr> {
                 Func::Abs => call(Func::Sign),
                 Func::Sign => return Some(Expr::Num(0.0)), // zero almost everywhere
                 Func::Atan => Expr::Num(1.0) / (Expr::Num(1.0) + sq(x.clone())),
-                Func::Min | Func::Max | Func::Atan2 => return None,
+                Func::Min | Func::Max | Func::Atan2 | Func::Quantise => return None,
             };
             outer * time_derivative(&x)?
         }

@@ -546,10 +546,17 @@ impl BondEffect {
 /// Whether a candidate adds dynamics a fixed step checked on the model
 /// without it cannot follow: a contact that closes and opens (backlash)
 /// switches a stiff mode on and off, and a linearly implicit step that starts
-/// in the gap and ends in contact blows up. Such a candidate is simulated with
-/// adaptive steps even by a model's copy for fitting.
+/// in the gap and ends in contact blows up; a law that quantises an input
+/// (`quantise(`) jumps between the input's samples wherever a level is
+/// crossed, where the fixed step was chosen for the input's own changes. Such
+/// a candidate is simulated with adaptive steps even by a model's copy for
+/// fitting.
 pub fn needs_adaptive_steps(c: &Candidate) -> bool {
-    matches!(Tag::read(&c.id), Some((Tag::Backlash, _)))
+    match Tag::read(&c.id) {
+        Some((Tag::Backlash, _)) => true,
+        Some((Tag::Law, formula)) => formula.contains("quantise("),
+        _ => false,
+    }
 }
 
 /// The error for a candidate no kind of this model takes.

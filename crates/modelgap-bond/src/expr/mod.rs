@@ -104,11 +104,14 @@ pub enum Func {
     Max,
     /// `atan2(y, x)`
     Atan2,
+    /// `quantise(x, q)`: `x` rounded to the nearest multiple of `q` (a
+    /// converter's or a driver's steps); `x` itself when `q ≤ 0`.
+    Quantise,
 }
 
 impl Func {
     /// Every function, in declaration order.
-    pub const ALL: [Func; 13] = [
+    pub const ALL: [Func; 14] = [
         Func::Sin,
         Func::Cos,
         Func::Tan,
@@ -122,6 +125,7 @@ impl Func {
         Func::Min,
         Func::Max,
         Func::Atan2,
+        Func::Quantise,
     ];
 
     /// The name used in model files and in printed equations (`ln` for [`Func::Ln`]).
@@ -140,6 +144,7 @@ impl Func {
             Func::Min => "min",
             Func::Max => "max",
             Func::Atan2 => "atan2",
+            Func::Quantise => "quantise",
         }
     }
 
@@ -151,10 +156,10 @@ impl Func {
         Func::ALL.into_iter().find(|f| f.name() == name)
     }
 
-    /// Number of arguments: 2 for `min`, `max` and `atan2`, 1 otherwise.
+    /// Number of arguments: 2 for `min`, `max`, `atan2` and `quantise`, 1 otherwise.
     pub fn arity(self) -> usize {
         match self {
-            Func::Min | Func::Max | Func::Atan2 => 2,
+            Func::Min | Func::Max | Func::Atan2 | Func::Quantise => 2,
             _ => 1,
         }
     }
@@ -185,7 +190,7 @@ impl Func {
             Func::Abs => x.abs(),
             Func::Sign => sign(x),
             Func::Atan => x.atan(),
-            Func::Min | Func::Max | Func::Atan2 => f64::NAN,
+            Func::Min | Func::Max | Func::Atan2 | Func::Quantise => f64::NAN,
         }
     }
 
@@ -196,6 +201,7 @@ impl Func {
             Func::Min => a.min(b),
             Func::Max => a.max(b),
             Func::Atan2 => a.atan2(b),
+            Func::Quantise => quantise(a, b),
             _ => f64::NAN,
         }
     }
@@ -216,6 +222,19 @@ fn sign(x: f64) -> f64 {
         -1.0
     } else {
         x * 0.0 // 0 for ±0 (keeping the sign of zero), NaN for NaN
+    }
+}
+
+/// `x` rounded to the nearest multiple of `q` (halves away from zero); `x`
+/// when `q ≤ 0` (no steps), NaN when either is NaN.
+#[inline]
+fn quantise(x: f64, q: f64) -> f64 {
+    if q > 0.0 {
+        q * (x / q).round()
+    } else if q.is_nan() {
+        q
+    } else {
+        x
     }
 }
 
@@ -613,6 +632,20 @@ mod tests {
         assert_eq!(Func::Sign.apply(&[2.0]), Some(1.0));
         assert!(Func::Sign.apply(&[f64::NAN]).is_some_and(f64::is_nan));
         assert_eq!(Func::Sign.apply(&[1.0, 2.0]), None);
+    }
+
+    #[test]
+    fn quantise_rounds_to_its_steps_and_passes_all_without_them() {
+        let q = |x: f64, step: f64| Func::Quantise.apply(&[x, step]).unwrap();
+        assert_eq!(q(0.74, 0.5), 0.5);
+        assert_eq!(q(-0.76, 0.5), -1.0);
+        assert_eq!(q(1.25, 0.5), 1.5); // a half away from zero
+        assert_eq!(q(0.74, 0.0), 0.74);
+        assert!(q(f64::NAN, 0.5).is_nan() && q(1.0, f64::NAN).is_nan());
+        assert_eq!(
+            parse("quantise(V, 0.5)").unwrap().to_string(),
+            "quantise(V, 0.5)"
+        );
     }
 
     #[test]

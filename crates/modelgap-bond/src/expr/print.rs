@@ -450,6 +450,7 @@ fn func_latex(f: Func) -> &'static str {
         Func::Min => "\\min",
         Func::Max => "\\max",
         Func::Atan2 => "\\operatorname{atan2}",
+        Func::Quantise => "\\operatorname{quantise}",
     }
 }
 

@@ -353,11 +353,10 @@ pub(super) fn linearised_step(
     let mut r1 = vec![0.0; m];
     let mut x = x0.to_vec();
     for j in 0..k {
-        let h = if x0[j] + steps[j] <= bounds[j].1 {
-            steps[j]
-        } else {
-            -steps[j]
-        };
+        let h = step_in_box(x0[j], steps[j], bounds[j].0, bounds[j].1);
+        if h == 0.0 {
+            continue;
+        }
         x[j] = x0[j] + h;
         if problem.residuals(&x, &mut r1).is_err() || r1.iter().any(|v| !v.is_finite()) {
             return Some((cost0, x0.to_vec(), r0));

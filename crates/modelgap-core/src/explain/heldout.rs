@@ -244,11 +244,12 @@ fn two_fold(
         .map(|&(e, i)| {
             let p = &effects[e].0.params[i];
             let x = effects[e].1[i];
-            let h = if x + fd * p.scale <= p.upper {
-                fd * p.scale
-            } else {
-                -fd * p.scale
-            };
+            // Within the bounds: a scanned quantiser's step is bounded closer than a
+            // finite-difference step.
+            let h = step_in_box(x, fd * p.scale, p.lower, p.upper);
+            if h == 0.0 {
+                return Some(vec![0.0; m]);
+            }
             let mut values: Vec<Vec<f64>> = effects.iter().map(|(_, v)| v.to_vec()).collect();
             values[e][i] = x + h;
             let moved: Vec<(&Candidate, &[f64])> = (effects.iter().zip(&values))

@@ -44,7 +44,7 @@ use crate::compare::{
 };
 use crate::effect::{Candidate, Effect, Prior};
 use crate::error::{CoreError, Result};
-use crate::fit::{Cancel, FitOptions, FitReport, ResidualProblem, Termination, fit};
+use crate::fit::{Cancel, FitOptions, FitReport, ResidualProblem, Termination, fit, step_in_box};
 pub use crate::judge::{FEW_OUTPUTS, at_noise_floor};
 use crate::judge::{JudgeOptions, Judgement, all_at_floor, judge_residual, recording_findings};
 use crate::model::Model;
@@ -2064,12 +2064,10 @@ fn calibration_columns(target: &Target, nominal: &[f64]) -> Vec<Vec<f64>> {
             if p.is_discrete() || bound_hit(start[j], p.lower, p.upper, p.scale).is_some() {
                 return None;
             }
-            let step = fd * p.scale;
-            let h = if start[j] + step <= p.upper {
-                step
-            } else {
-                -step
-            };
+            let h = step_in_box(start[j], fd * p.scale, p.lower, p.upper);
+            if h == 0.0 {
+                return None;
+            }
             let mut values = start.clone();
             values[j] += h;
             let mut r = vec![0.0; nominal.len()];

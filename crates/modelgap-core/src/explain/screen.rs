@@ -21,10 +21,12 @@
 //! | ripple | `sin(2πx/λ)`, `cos(2πx/λ)`, λ scanned over 1/100 … 1/2 of the travel | positions |
 //! | step | `H(t − t₀)`, t₀ scanned | time |
 //! | ramp | `max(t − t₀, 0)`, t₀ scanned | time |
+//! | quantiser | `quantise(u, q) − u` (a driver's or converter's steps, rounding or truncating), q scanned over 1/500 … 1/8 of the input's range | inputs that take many values |
 //! | symbolic | a formula of the signals, built by the symbolic search (`symbolic.rs`) when the rest leaves the estimate well above its band | flows, positions, displacements, efforts |
 //!
 //! Selection is sparse and forward: the block (one term, or a harmonic's
-//! sine and cosine) that lowers the weighted residual most is added while
+//! sine and cosine) that lowers the weighted residual most (the simplest of
+//! those that tie with it, [`TIE`]) is added while
 //! its gain beats the Bayesian information criterion counted in *effective*
 //! samples (the estimate is smooth: its lag-1 correlation says how many
 //! independent samples it holds) plus the size of its shape scan, and while
@@ -45,6 +47,10 @@ const MAX_SAMPLES: usize = 4000;
 const MAX_BLOCKS: usize = 4;
 /// A term joins a law only if it removes at least this share of what the law leaves.
 const MIN_SHARE: f64 = 0.1;
+/// Blocks whose residual is within this share of what the best removes of each other
+/// tie: the simplest is taken ([`next_block`]). (A hundredth changed the outside buck's
+/// diode drop: its sign law lost its place to a dead zone of the supply.)
+const TIE: f64 = 0.001;
 /// A product of two signals joins a law only if it removes at least this share.
 const PRODUCT_MIN_SHARE: f64 = 0.33;
 /// Harmonics of an angle up to this order.
@@ -92,6 +98,11 @@ pub enum Family {
     /// grows with the displacement; `x·v`), or of one with a harmonic of the
     /// angle (`v·sin nθ`: friction that varies around a turn).
     Product,
+    /// `quantise(u, q) − u`: what an actuator that delivers its command `u`
+    /// in steps of `q` adds to it (a driver's or a converter's resolution),
+    /// rounding (`u` to the nearest step) or truncating (steps between them,
+    /// with a constant).
+    Quantiser,
     /// A formula the symbolic search built from the signals at the place
     /// when the typed library left the estimate well above its band: a
     /// shape, reported as such, with no physical law named.
@@ -119,6 +130,7 @@ impl Family {
             Family::Step => "a step at one time (a load or a fault)",
             Family::Ramp => "a drift from one time on",
             Family::Product => "a product of two signals (one modulates the other's effect)",
+            Family::Quantiser => "the steps of a quantised input (an actuator's resolution)",
             Family::Symbolic => "a formula the symbolic search found (no named law of the library)",
         }
     }
@@ -465,6 +477,130 @@ fn ripples(y: &[f64], a: &ActingSignal, x: &[f64], eu: &str) -> Vec<Block> {
         .collect()
 }
 
+/// Steps of a quantiser tried per input: log-spaced, each this many times the last (fine
+/// enough that the step of the 60th level from zero is met within a quarter of a step).
+const QUANTUM_RATIO: f64 = 1.004;
+/// The steps scanned span the input's range over this many steps at most and at least.
+const QUANTUM_LEVELS: (f64, f64) = (500.0, 8.0);
+/// An input must take at least this many distinct values for its steps to be told from
+/// a table of its levels (a staircase command of eight levels can be made to say anything).
+const QUANTUM_MIN_VALUES: usize = 64;
+/// The scan's peaks are refined on a grid this many times finer (either way, a scan step).
+const QUANTUM_REFINE: usize = 40;
+/// Quantisers offered to the selection: the best few steps of the scan.
+const QUANTUM_PEAKS: usize = 3;
+
+/// What an actuator that delivers the input `u` (values `x` at the screen's samples, `y`
+/// the missing signal there) in steps of `q` adds to it: `quantise(u, q) − u`, rounding,
+/// or `q (⌊u/q⌋ + ½) − u`, the steps between the levels (with a constant: a converter that
+/// truncates). The steps from 1/500 to 1/8 of the input's range are scanned
+/// ([`QUANTUM_RATIO`]), each sized against `y` alone (with a constant), and the few that
+/// explain most are refined ([`QUANTUM_REFINE`]) and become blocks whose step is a shape
+/// parameter (bounded to one refined step either way: the error is not smooth in it).
+fn quantisers(y: &[f64], a: &ActingSignal, x: &[f64], eu: &str) -> Vec<Block> {
+    let (lo, hi) = x
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+            (l.min(*v), h.max(*v))
+        });
+    let range = hi - lo;
+    if !(range.is_finite() && range > 0.0) || y.len() != x.len() {
+        return Vec::new();
+    }
+    let mut sorted = x.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    sorted.dedup();
+    if sorted.len() < QUANTUM_MIN_VALUES {
+        return Vec::new();
+    }
+    let n = y.len() as f64;
+    let y_mean = y.iter().sum::<f64>() / n;
+    let (q_lo, q_hi) = (range / QUANTUM_LEVELS.0, range / QUANTUM_LEVELS.1);
+    let count = ((q_hi / q_lo).ln() / QUANTUM_RATIO.ln()).ceil() as usize + 1;
+    let step_error = |u: f64, q: f64, between: bool| {
+        if between {
+            q * ((u / q).floor() + 0.5) - u
+        } else {
+            q * (u / q).round() - u
+        }
+    };
+    // The sum of squares of y each step explains, with a constant beside it.
+    let power = |q: f64, between: bool| {
+        let (mut s, mut ss, mut sy) = (0.0, 0.0, 0.0);
+        for (&u, yi) in x.iter().zip(y) {
+            let c = step_error(u, q, between);
+            s += c;
+            ss += c * c;
+            sy += c * (yi - y_mean);
+        }
+        let cc = ss - s * s / n;
+        if cc > 1e-12 * ss { sy * sy / cc } else { 0.0 }
+    };
+    let mut found: Vec<(f64, f64, bool)> = Vec::new();
+    for between in [false, true] {
+        let scan: Vec<(f64, f64)> = (0..count)
+            .map(|i| {
+                let q = q_lo * QUANTUM_RATIO.powi(i as i32);
+                (q, power(q, between))
+            })
+            .collect();
+        for i in 0..count {
+            let left = i == 0 || scan[i].1 >= scan[i - 1].1;
+            let right = i + 1 == count || scan[i].1 >= scan[i + 1].1;
+            if left && right && scan[i].1 > 0.0 {
+                found.push((scan[i].1, scan[i].0, between));
+            }
+        }
+    }
+    found.sort_by(|p, q| q.0.total_cmp(&p.0));
+    found.truncate(QUANTUM_PEAKS);
+    // Each peak refined within a grid step either way: the step of the n-th level is
+    // off by n times the step's error, so it must be known far better than the grid.
+    let fine = QUANTUM_RATIO.ln() / QUANTUM_REFINE as f64;
+    for (p, q, between) in &mut found {
+        let q0 = *q;
+        for i in -(QUANTUM_REFINE as i32)..=QUANTUM_REFINE as i32 {
+            let qi = q0 * (fine * i as f64).exp();
+            let pi = power(qi, *between);
+            if pi > *p {
+                (*p, *q) = (pi, qi);
+            }
+        }
+    }
+    let (name, label, unit) = (&a.name, &a.label, &a.unit);
+    found
+        .into_iter()
+        .map(|(_, q, between)| {
+            let (text, expr) = if between {
+                (
+                    format!("({label} in steps of § between the levels − {label})"),
+                    format!("(quantise({name} - 0.5 * §, §) + 0.5 * § - {name})"),
+                )
+            } else {
+                (
+                    format!("({label} in steps of § − {label})"),
+                    format!("(quantise({name}, §) - {name})"),
+                )
+            };
+            let (q_min, q_max) = (q * (-fine).exp(), q * fine.exp());
+            Block {
+                family: Family::Quantiser,
+                member: name.clone(),
+                scanned: 2 * count,
+                terms: vec![shaped(
+                    term("c_quant", Family::Quantiser, text, expr, per(eu, unit)),
+                    "q",
+                    unit,
+                    q,
+                    q_min,
+                    q_max,
+                )],
+                columns: vec![x.iter().map(|&u| step_error(u, q, between)).collect()],
+            }
+        })
+        .collect()
+}
+
 /// `a/(b)`, `a/b` for a simple unit, or `a` when `b` is dimensionless.
 fn per(a: &str, b: &str) -> String {
     if b.is_empty() || b == "1" {
@@ -772,7 +908,11 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
             }
             // An input's gain is the menu's typed `gain@` effect on its source; as a law
             // term beside steps it mimics a sign of the flow under a staircase drive.
-            SignalRole::Input => {}
+            // What an actuator's steps add to its command is not on the menu.
+            SignalRole::Input => {
+                let y: Vec<f64> = idx.iter().map(|&k| m.value[k]).collect();
+                out.extend(quantisers(&y, a, &v, eu));
+            }
         }
     }
     out.extend(products(m, idx));
@@ -1348,7 +1488,8 @@ fn left_by(lib: &[Block], chosen: &[usize], y: &[f64], w: &[f64]) -> Vec<f64> {
 
 /// One step of the forward selection: of the blocks `offered` whose family the law does
 /// not have yet, the one that lowers the weighted residual sum of squares (`rss`, leaving
-/// `residual`) most, with that sum — if it earns its place: its gain beats the
+/// `residual`) most (the simplest of those that tie with it, [`TIE`]), with that sum — if
+/// it earns its place: its gain beats the
 /// information criterion counted in effective samples plus its scan's size, it removes a
 /// tenth of what is left (a product or a formula a third), and its share agrees in sign
 /// and size on both halves of the recording (a law, not an episode).
@@ -1369,20 +1510,36 @@ fn next_block(
             o.family == b.family && (b.family != Family::Harmonic || o.member == b.member)
         })
     };
-    let mut best: Option<(usize, f64)> = None;
+    // The block that leaves the least; of those that leave as little (within
+    // [`TIE`]), the one the fewest parameters and the smallest scan state: a scanned
+    // shape must not win a tie with a plain term by chance (a `|tanh(i/ε)|` of a width
+    // of 0.7 mA taken for a constant, and dipping wherever the current crosses zero).
+    // (Ranking every block by the information criterion instead, in the few effective
+    // samples of a smooth estimate, let a constant beat Coulomb friction's sign.)
+    let cost_of = |b: &Block| {
+        let shaped = b.terms.iter().filter(|t| t.shape.is_some()).count();
+        (b.columns.len() + shaped, b.scanned)
+    };
+    let mut fits: Vec<(usize, f64)> = Vec::new();
     for bi in offered {
         if taken(&lib[bi]) {
             continue;
         }
         let mut trial = chosen.to_vec();
         trial.push(bi);
-        if let Some((_, _, r)) = wls(&design(lib, &trial), y, w)
-            && best.is_none_or(|(_, br)| r < br)
-        {
-            best = Some((bi, r));
+        if let Some((_, _, r)) = wls(&design(lib, &trial), y, w) {
+            fits.push((bi, r));
         }
     }
-    let (bi, new_rss) = best?;
+    let least = fits.iter().map(|f| f.1).fold(f64::INFINITY, f64::min);
+    let best = (fits.iter())
+        .filter(|f| f.1 <= least + TIE * (rss - least).max(0.0))
+        .min_by(|a, b| {
+            cost_of(&lib[a.0])
+                .cmp(&cost_of(&lib[b.0]))
+                .then(a.1.total_cmp(&b.1))
+        });
+    let &(bi, new_rss) = best?;
     let b = &lib[bi];
     let mut trial = chosen.to_vec();
     trial.push(bi);

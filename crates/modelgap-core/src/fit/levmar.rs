@@ -638,15 +638,7 @@ impl Solver<'_> {
         let (lo, hi) = self.bounds[i];
         let xi = self.x[i];
         let h = self.fd_steps[i];
-        let primary = if xi + h <= hi {
-            h
-        } else if xi - h >= lo {
-            -h
-        } else if hi - xi >= xi - lo {
-            hi - xi // the box is narrower than the step: use the wider side
-        } else {
-            lo - xi
-        };
+        let primary = super::step_in_box(xi, h, lo, hi);
         // If the residuals fail on one side, try the other.
         let alternate = (lo..=hi).contains(&(xi - primary)).then_some(-primary);
         let col = i * m..(i + 1) * m;

@@ -106,3 +106,19 @@ mod report;
 pub use levmar::{DEFAULT_FD_STEP, FitOptions, fit};
 pub use problem::{Cancel, ResidualProblem};
 pub use report::{FitReport, Termination};
+
+/// A finite-difference step of about `h` (positive) from `x` that stays within
+/// `[lo, hi]`: forward, backward near the upper bound, and the wider side when the
+/// box is narrower than the step (a shape a scan pinned, bounded to its grid's
+/// spacing); 0 when the box leaves no room.
+pub(crate) fn step_in_box(x: f64, h: f64, lo: f64, hi: f64) -> f64 {
+    if x + h <= hi {
+        h
+    } else if x - h >= lo {
+        -h
+    } else if hi - x >= x - lo {
+        (hi - x).max(0.0)
+    } else {
+        (lo - x).min(0.0)
+    }
+}
