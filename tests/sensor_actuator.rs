@@ -306,7 +306,7 @@ fn smooth_command(t: f64) -> f64 {
 /// A driver whose converter truncates its command to steps of 0.47 V (`q ⌊v/q⌋`: not the
 /// rounding of the library's term, whose steps are centred on the levels) is found as
 /// the steps of a quantised input at the electrical loop, with its step within 5 % —
-/// not as "R is off", a gain or an offset.
+/// not as "R is off", a gain or an offset alone — and both outputs are brought to the floor.
 #[test]
 fn a_driver_that_delivers_its_command_in_steps_is_named_with_its_step() {
     let q = 0.47;
@@ -314,15 +314,27 @@ fn a_driver_that_delivers_its_command_in_steps_is_named_with_its_step() {
     let ex = explained(&driven_by(smooth_command, truncate, 29));
     let text = modelgap::story::explanation_text(&ex, 6);
     println!("{text}");
-    let best = ex.chosen.first().expect("an effect is chosen");
+    // The steps, alone or beside the constant they truncate by (said as the actuator's
+    // offset, the same physics as the law's constant).
+    let best = (ex.chosen.iter())
+        .find(|r| r.candidate.id.contains("quantise(V"))
+        .unwrap_or_else(|| panic!("no quantiser chosen:\n{text}"));
     assert!(best.candidate.id.starts_with("law@1e:"), "{text}");
-    assert!(best.candidate.id.contains("quantise(V"), "{text}");
     let step = (best.params.iter())
         .find(|p| p.name.starts_with("q"))
         .expect("the step is a parameter")
         .value;
     assert!((step / q - 1.0).abs() < 0.05, "step {step}\n{text}");
-    assert_eq!(ex.verdict, modelgap::Verdict::EffectFound, "{text}");
+    let c = (best.params.iter())
+        .find(|p| p.name.starts_with("c_quant"))
+        .expect("the quantiser's coefficient")
+        .value;
+    // What the actuator adds, as it delivers it: a coefficient of −1 in the missing effort.
+    assert!((c + 1.0).abs() < 0.1, "c_quant {c}\n{text}");
+    assert_ne!(ex.verdict, modelgap::Verdict::NothingMissing, "{text}");
+    for o in &ex.outputs {
+        assert!(o.rms_after <= 1.3 * o.noise_floor, "{}:\n{text}", o.name);
+    }
 }
 
 /// The same rich command delivered as it is: nothing is missing, and no step is read

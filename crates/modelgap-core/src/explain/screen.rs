@@ -25,8 +25,7 @@
 //! | symbolic | a formula of the signals, built by the symbolic search (`symbolic.rs`) when the rest leaves the estimate well above its band | flows, positions, displacements, efforts |
 //!
 //! Selection is sparse and forward: the block (one term, or a harmonic's
-//! sine and cosine) that lowers the weighted residual most (the simplest of
-//! those that tie with it, [`TIE`]) is added while
+//! sine and cosine) that lowers the weighted residual most is added while
 //! its gain beats the Bayesian information criterion counted in *effective*
 //! samples (the estimate is smooth: its lag-1 correlation says how many
 //! independent samples it holds) plus the size of its shape scan, and while
@@ -47,10 +46,6 @@ const MAX_SAMPLES: usize = 4000;
 const MAX_BLOCKS: usize = 4;
 /// A term joins a law only if it removes at least this share of what the law leaves.
 const MIN_SHARE: f64 = 0.1;
-/// Blocks whose residual is within this share of what the best removes of each other
-/// tie: the simplest is taken ([`next_block`]). (A hundredth changed the outside buck's
-/// diode drop: its sign law lost its place to a dead zone of the supply.)
-const TIE: f64 = 0.001;
 /// A product of two signals joins a law only if it removes at least this share.
 const PRODUCT_MIN_SHARE: f64 = 0.33;
 /// Harmonics of an angle up to this order.
@@ -376,6 +371,14 @@ const RIPPLE_PERIODS: (f64, f64) = (2.0, 100.0);
 /// Ripples offered to the selection: the best few wavelengths of the scan.
 const RIPPLE_PEAKS: usize = 3;
 
+/// The span of `x` (largest less smallest), when finite and positive.
+fn span(x: &[f64]) -> Option<f64> {
+    let (lo, hi) = (x.iter()).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+        (l.min(*v), h.max(*v))
+    });
+    Some(hi - lo).filter(|s| s.is_finite() && *s > 0.0)
+}
+
 /// Ripples locked to the position `x` (values at the screen's samples, `y` the
 /// missing signal there). Wavelengths from a hundredth to half of the travel
 /// are scanned on a grid even in wavenumber, fine enough that the phase drifts
@@ -383,15 +386,9 @@ const RIPPLE_PEAKS: usize = 3;
 /// a cosine, least squares), and the few that explain most become blocks whose
 /// wavelength is a shape parameter (its bounds three grid steps either way).
 fn ripples(y: &[f64], a: &ActingSignal, x: &[f64], eu: &str) -> Vec<Block> {
-    let (lo, hi) = x
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
-            (l.min(*v), h.max(*v))
-        });
-    let travel = hi - lo;
-    if !(travel.is_finite() && travel > 0.0) || y.len() != x.len() {
+    let Some(travel) = span(x).filter(|_| y.len() == x.len()) else {
         return Vec::new();
-    }
+    };
     let mean = y.iter().sum::<f64>() / y.len() as f64;
     let tau = std::f64::consts::TAU;
     let (k_lo, k_hi) = (
@@ -498,15 +495,9 @@ const QUANTUM_PEAKS: usize = 3;
 /// explain most are refined ([`QUANTUM_REFINE`]) and become blocks whose step is a shape
 /// parameter (bounded to one refined step either way: the error is not smooth in it).
 fn quantisers(y: &[f64], a: &ActingSignal, x: &[f64], eu: &str) -> Vec<Block> {
-    let (lo, hi) = x
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
-            (l.min(*v), h.max(*v))
-        });
-    let range = hi - lo;
-    if !(range.is_finite() && range > 0.0) || y.len() != x.len() {
+    let Some(range) = span(x).filter(|_| y.len() == x.len()) else {
         return Vec::new();
-    }
+    };
     let mut sorted = x.to_vec();
     sorted.sort_by(f64::total_cmp);
     sorted.dedup();
@@ -1488,8 +1479,7 @@ fn left_by(lib: &[Block], chosen: &[usize], y: &[f64], w: &[f64]) -> Vec<f64> {
 
 /// One step of the forward selection: of the blocks `offered` whose family the law does
 /// not have yet, the one that lowers the weighted residual sum of squares (`rss`, leaving
-/// `residual`) most (the simplest of those that tie with it, [`TIE`]), with that sum — if
-/// it earns its place: its gain beats the
+/// `residual`) most, with that sum — if it earns its place: its gain beats the
 /// information criterion counted in effective samples plus its scan's size, it removes a
 /// tenth of what is left (a product or a formula a third), and its share agrees in sign
 /// and size on both halves of the recording (a law, not an episode).
@@ -1510,36 +1500,20 @@ fn next_block(
             o.family == b.family && (b.family != Family::Harmonic || o.member == b.member)
         })
     };
-    // The block that leaves the least; of those that leave as little (within
-    // [`TIE`]), the one the fewest parameters and the smallest scan state: a scanned
-    // shape must not win a tie with a plain term by chance (a `|tanh(i/ε)|` of a width
-    // of 0.7 mA taken for a constant, and dipping wherever the current crosses zero).
-    // (Ranking every block by the information criterion instead, in the few effective
-    // samples of a smooth estimate, let a constant beat Coulomb friction's sign.)
-    let cost_of = |b: &Block| {
-        let shaped = b.terms.iter().filter(|t| t.shape.is_some()).count();
-        (b.columns.len() + shaped, b.scanned)
-    };
-    let mut fits: Vec<(usize, f64)> = Vec::new();
+    let mut best: Option<(usize, f64)> = None;
     for bi in offered {
         if taken(&lib[bi]) {
             continue;
         }
         let mut trial = chosen.to_vec();
         trial.push(bi);
-        if let Some((_, _, r)) = wls(&design(lib, &trial), y, w) {
-            fits.push((bi, r));
+        if let Some((_, _, r)) = wls(&design(lib, &trial), y, w)
+            && best.is_none_or(|(_, br)| r < br)
+        {
+            best = Some((bi, r));
         }
     }
-    let least = fits.iter().map(|f| f.1).fold(f64::INFINITY, f64::min);
-    let best = (fits.iter())
-        .filter(|f| f.1 <= least + TIE * (rss - least).max(0.0))
-        .min_by(|a, b| {
-            cost_of(&lib[a.0])
-                .cmp(&cost_of(&lib[b.0]))
-                .then(a.1.total_cmp(&b.1))
-        });
-    let &(bi, new_rss) = best?;
+    let (bi, new_rss) = best?;
     let b = &lib[bi];
     let mut trial = chosen.to_vec();
     trial.push(bi);
