@@ -294,26 +294,6 @@ pub(super) fn second_effect(
     if gain <= opts.significance {
         return Second::None;
     }
-    // A second must matter: an effect that nowhere moves any output's prediction by as
-    // much as its noise is taking up a model error it does not explain, however many
-    // samples it averages over (beside a first that leaves a hum or stands for two
-    // stages, an inertia changed by 0.06 % moved the speed by at most 0.6 σ while lowering
-    // the error significantly; every second that is the physics moved it by 4 σ or more).
-    let mut single = vec![0.0; target.n_residuals()];
-    if target
-        .residuals(&[(&first_c, first_values.as_slice())], &mut single)
-        .is_ok()
-    {
-        let moved = largest_move(target, floors, &single, &joint_first.weighted);
-        if let Some((j, peak)) = moved.filter(|&(_, p)| p < MATERIAL_MOVE) {
-            return Second::NotAdded(format!(
-                "a second effect, {} ({}), lowers the error but nowhere moves a prediction by \
-                 as much as the noise (at most {peak:.2} σ, on `{}`): it is too small to \
-                 matter and is not added",
-                second.candidate.id, second.candidate.name, target.names[j]
-            ));
-        }
-    }
     // A change at the record's edge acts in one half only, where it cannot be told from the
     // start's state or from a constant: the halves cannot test it, and nothing else can
     // (Silverbox's linear stiffness "changing" 4.3 ms into the record beside the cubic,
@@ -371,6 +351,26 @@ pub(super) fn second_effect(
             }
         }
     };
+    // Held out, a second must also matter: an effect that nowhere moves any output's prediction by as
+    // much as its noise is taking up a model error it does not explain, however many
+    // samples it averages over (beside a first that leaves a hum or stands for two
+    // stages, an inertia changed by 0.06 % moved the speed by at most 0.6 σ while lowering
+    // the error significantly; every second that is the physics moved it by 4 σ or more).
+    let mut single = vec![0.0; target.n_residuals()];
+    if target
+        .residuals(&[(&first_c, first_values.as_slice())], &mut single)
+        .is_ok()
+    {
+        let moved = largest_move(target, floors, &single, &joint_first.weighted);
+        if let Some((j, peak)) = moved.filter(|&(_, p)| p < MATERIAL_MOVE) {
+            return Second::NotAdded(format!(
+                "a second effect, {} ({}), lowers the error but nowhere moves a prediction by \
+                 as much as the noise (at most {peak:.2} σ, on `{}`): it is too small to \
+                 matter and is not added",
+                second.candidate.id, second.candidate.name, target.names[j]
+            ));
+        }
+    }
     let white2 = Whitening {
         cost_before: target.whitened_cost(base_weighted, &rhos2),
         rhos: rhos2,
