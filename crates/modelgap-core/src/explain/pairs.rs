@@ -351,9 +351,9 @@ pub(super) fn second_effect(
             }
         }
     };
-    // Held out, a second must also matter: an effect that nowhere moves any output's prediction by as
-    // much as its noise is taking up a model error it does not explain, however many
-    // samples it averages over (beside a first that leaves a hum or stands for two
+    // Held out, a second must also matter: an effect that nowhere moves any output's
+    // prediction by as much as its noise is taking up a model error it does not explain,
+    // however many samples it averages over (beside a first that leaves a hum or stands for two
     // stages, an inertia changed by 0.06 % moved the speed by at most 0.6 σ while lowering
     // the error significantly; every second that is the physics moved it by 4 σ or more).
     let mut single = vec![0.0; target.n_residuals()];
