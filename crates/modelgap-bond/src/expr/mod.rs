@@ -646,6 +646,11 @@ mod tests {
             parse("quantise(V, 0.5)").unwrap().to_string(),
             "quantise(V, 0.5)"
         );
+        // One argument, or three: a typed error that names the function.
+        for bad in ["quantise(V)", "quantise(V, 0.5, 1)"] {
+            let e = parse(bad).unwrap_err().to_string();
+            assert!(e.contains("quantise"), "{bad}: {e}");
+        }
     }
 
     #[test]
