@@ -293,16 +293,21 @@ fn an_output_sensor_behind_an_rc_filter_is_named_a_lag() {
 }
 
 #[test]
-fn a_diodes_forward_drop_is_a_sign_law_in_the_inductors_loop() {
-    // 0.7 V × (1 − m) × sign(i): a constant drop and, as −0.7 m, a supply that seems
-    // 0.7 V higher — the law's sign term and a gain of the supply say that much; the
-    // verdict is partial where the two differ.
+fn a_diodes_forward_drop_is_a_sign_law_switched_by_the_duty_cycle() {
+    // 0.7 V × (1 − m) × sign(i): the sign term and, as the product of the input `m`
+    // with the sign of the current, the part the switch takes away while it is closed.
     let ex = explained(&record(&case("diode drop 0.7 V"), 2e-3, 0.0, 44));
     let (ids, params, text) = chosen(&ex);
-    assert!(ids[0].starts_with("law@1L:"), "{text}");
+    assert_eq!(ids.len(), 1, "{text}");
+    assert!(
+        ids[0].starts_with("law@1L:") && ids[0].contains("* m * tanh("),
+        "{text}"
+    );
     let drop = value(&params, "c_sign", &text);
     assert!((drop / 0.7 - 1.0).abs() < 0.05, "{drop}:\n{text}");
-    assert_ne!(ex.verdict, modelgap::Verdict::NothingMissing, "{text}");
+    let switched = value(&params, "c_prod", &text);
+    assert!((switched / -0.7 - 1.0).abs() < 0.05, "{switched}:\n{text}");
+    assert_eq!(ex.verdict, modelgap::Verdict::EffectFound, "{text}");
 }
 
 #[test]

@@ -17,7 +17,7 @@
 //! | square root | `√max(e, 0)` | node efforts (an orifice) |
 //! | power | `sign(e)·|e|^p`, p scanned over 0.3 … 3 | node efforts (seepage, convection) |
 //! | harmonics | `sin nθ`, `cos nθ`, every n in 1..=24 at once | angles |
-//! | product | `a·b`, `a·|b|`, `a²·b` of two signals; `b·sin nθ`, `b·cos nθ` for n in 1..=12 | flows, positions, displacements, efforts, angles |
+//! | product | `a·b`, `a·|b|`, `a²·b` of two signals; `b·sin nθ`, `b·cos nθ` for n in 1..=12; an input times a signal, `u·b`, or a flow's sign, `u·tanh(f/ε)` | flows, positions, displacements, efforts, angles, inputs |
 //! | ripple | `sin(2πx/λ)`, `cos(2πx/λ)`, λ scanned over 1/100 … 1/2 of the travel | positions |
 //! | step | `H(t − t₀)`, t₀ scanned | time |
 //! | ramp | `max(t − t₀, 0)`, t₀ scanned | time |
@@ -30,7 +30,10 @@
 //! samples (the estimate is smooth: its lag-1 correlation says how many
 //! independent samples it holds) plus the size of its shape scan, and while
 //! its coefficient agrees on both halves of the recording (a law, not an
-//! episode). One member per shape family. The result is a [`Law`]: terms
+//! episode). Where no single block joins, two may join together (each
+//! beside the other by the same rules, `next_pair`): a law of two terms of
+//! like size leaves, after either, the other's smooth shape. One member per
+//! shape family. The result is a [`Law`]: terms
 //! with coefficients, ± and units, ready to be built into the model and
 //! confirmed by simulation ([`crate::Model::law_candidate`]).
 
@@ -621,6 +624,19 @@ pub(super) fn rms_of(x: &[f64]) -> f64 {
     (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
 }
 
+/// The widths `ε` a sign term `tanh(v/ε)` of a flow of RMS `scale` is
+/// scanned over, with the bounds its confirming fit keeps them in: from
+/// sharp to smooth, 19 widths log-spaced over 0.05 % … 30 % of the RMS (each
+/// 1.43 times the last: a sharp friction's width is met within 20 %, so no
+/// second term is needed to mend the shape).
+fn sign_widths(scale: f64) -> (Vec<f64>, f64, f64) {
+    let eps: Vec<f64> = (0..19)
+        .map(|i| scale * 5e-4 * (600.0_f64).powf(i as f64 / 18.0))
+        .collect();
+    let (lo, hi) = (eps[0] / 3.0, eps[eps.len() - 1] * 3.0);
+    (eps, lo, hi)
+}
+
 /// The library at a place, evaluated on the (decimated) samples `idx`.
 fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
     let t: Vec<f64> = idx.iter().map(|&k| m.t[k]).collect();
@@ -711,13 +727,7 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
         match a.role {
             SignalRole::Flow => {
                 out.push(linear("lin"));
-                // From sharp to smooth: 19 widths, log-spaced over 0.05 % … 30 % of the RMS
-                // flow (each 1.43 times the last: a sharp friction's width is met within 20 %,
-                // so no second term is needed to mend the shape).
-                let eps: Vec<f64> = (0..19)
-                    .map(|i| scale * 5e-4 * (600.0_f64).powf(i as f64 / 18.0))
-                    .collect();
-                let (elo, ehi) = (eps[0] / 3.0, eps[eps.len() - 1] * 3.0);
+                let (eps, elo, ehi) = sign_widths(scale);
                 // Coulomb friction, `tanh(v/ε)`; then, over the same widths, the level friction
                 // takes while moving either way, `|tanh(v/ε)|` (with a sign term: Coulomb
                 // friction that differs by direction).
@@ -964,8 +974,10 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
 /// positions, displacements, efforts), `a·b`, `a·|b|`, `|a|·b`, `a²·b` and
 /// `a·b²` (each odd in one of them, so that it is not a constant in
 /// disguise), and for an angle with every other signal, `b·sin nθ` and
-/// `b·cos nθ` (n in 1..=[`MAX_PRODUCT_HARMONIC`]). One family, one member per
-/// law: its size is the multiple-comparison cost of taking any.
+/// `b·cos nθ` (n in 1..=[`MAX_PRODUCT_HARMONIC`]), and for an input `u`
+/// with every signal, `u·b` and, with a flow, `u·tanh(f/ε)` over the sign's
+/// widths. One family, one member per law: its size is the
+/// multiple-comparison cost of taking any.
 fn products(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
     let varying = |a: &&ActingSignal| {
         let v: Vec<f64> = idx.iter().map(|&k| a.values[k]).collect();
@@ -1086,6 +1098,59 @@ fn products(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
                         v.iter()
                             .zip(&angle)
                             .map(|(x, q)| x * (k * q).cos())
+                            .collect(),
+                    ],
+                ));
+            }
+        }
+    }
+    // An input that switches or scales an effect at the place: `u·b` for every signal, and
+    // `u·tanh(f/ε)` for a flow over the sign's widths (a diode that conducts while a
+    // switch is open, `(1 − m)·V_d·sign(i)`: beside the sign term, `m·tanh(i/ε)`).
+    let inputs: Vec<&ActingSignal> = (m.acting.iter())
+        .filter(|a| a.role == SignalRole::Input)
+        .filter(varying)
+        .collect();
+    for u in &inputs {
+        let uv = col(u);
+        for b in &plain {
+            let bv = col(b);
+            blocks.push((
+                format!("{}*{}", u.name, b.name),
+                vec![term(
+                    "c_prod",
+                    Family::Product,
+                    format!("{} · {}", u.label, b.label),
+                    format!("{} * {}", u.name, b.name),
+                    per(eu, &times(&u.unit, &b.unit)),
+                )],
+                vec![uv.iter().zip(&bv).map(|(p, q)| p * q).collect()],
+            ));
+            if b.role != SignalRole::Flow {
+                continue;
+            }
+            let (eps, lo, hi) = sign_widths(rms_of(&bv));
+            for e in eps {
+                blocks.push((
+                    format!("{}*tanh({})", u.name, b.name),
+                    vec![shaped(
+                        term(
+                            "c_prod",
+                            Family::Product,
+                            format!("{} · tanh({} / §)", u.label, b.label),
+                            format!("{} * tanh({} / §)", u.name, b.name),
+                            per(eu, &u.unit),
+                        ),
+                        "eps",
+                        &b.unit,
+                        e,
+                        lo,
+                        hi,
+                    )],
+                    vec![
+                        uv.iter()
+                            .zip(&bv)
+                            .map(|(p, q)| p * (q / e).tanh())
                             .collect(),
                     ],
                 ));
@@ -1245,12 +1310,17 @@ pub fn screen_laws(m: &MissingSignal, linear: bool) -> Vec<Law> {
     let greedy = |lib: &[Block], mut chosen: Vec<usize>, mut rss: f64| -> (Vec<usize>, f64) {
         while chosen.len() < MAX_BLOCKS {
             let residual = left_by(lib, &chosen, &y, &w);
-            match next_block(lib, &chosen, typed.clone(), &y, &w, rss, &residual) {
-                Some((bi, r)) => {
-                    chosen.push(bi);
-                    rss = r;
-                }
-                None => break,
+            if let Some((bi, r)) = next_block(lib, &chosen, typed.clone(), &y, &w, rss, &residual) {
+                chosen.push(bi);
+                rss = r;
+            } else if let Some((first, second, r)) = (chosen.len() + 2 <= MAX_BLOCKS)
+                .then(|| next_pair(lib, &chosen, &y, &w, rss))
+                .flatten()
+            {
+                chosen.extend([first, second]);
+                rss = r;
+            } else {
+                break;
             }
         }
         (chosen, rss)
@@ -1575,6 +1645,66 @@ fn next_block(
     Some((bi, new_rss))
 }
 
+/// The firsts a pair of blocks is tried from: the blocks that alone leave least.
+const PAIR_FIRSTS: usize = 3;
+
+/// Two blocks that join the law together where neither joins alone: a law
+/// of two terms of like size (a diode's drop `0.7 tanh(i/ε)` and the part
+/// `−0.7 m tanh(i/ε)` a switch takes away) leaves, after either term, the
+/// other's smooth shape, counted as a couple of effective samples, so
+/// neither earns its place by itself. Of the [`PAIR_FIRSTS`] blocks that
+/// alone leave least, each is tried with every other; the pair that leaves
+/// least is taken if each of its blocks joins the law beside the other by
+/// [`next_block`]'s rules (gain over cost in the samples the pair leaves,
+/// share, both halves).
+fn next_pair(
+    lib: &[Block],
+    chosen: &[usize],
+    y: &[f64],
+    w: &[f64],
+    rss: f64,
+) -> Option<(usize, usize, f64)> {
+    let taken = |with: &[usize], b: &Block| {
+        with.iter().any(|&c| {
+            let o = &lib[c];
+            o.family == b.family && (b.family != Family::Harmonic || o.member == b.member)
+        })
+    };
+    let left = |blocks: &[usize]| -> Option<f64> {
+        let mut trial = chosen.to_vec();
+        trial.extend_from_slice(blocks);
+        wls(&design(lib, &trial), y, w).map(|(_, _, r)| r)
+    };
+    let mut firsts: Vec<(usize, f64)> = (0..lib.len())
+        .filter(|&b| !taken(chosen, &lib[b]))
+        .filter_map(|b| left(&[b]).filter(|r| r.is_finite()).map(|r| (b, r)))
+        .collect();
+    firsts.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let mut best: Option<(usize, usize, f64)> = None;
+    for &(first, _) in firsts.iter().take(PAIR_FIRSTS) {
+        let mut with = chosen.to_vec();
+        with.push(first);
+        for second in (0..lib.len()).filter(|&b| b != first && !taken(&with, &lib[b])) {
+            if let Some(r) = left(&[first, second]).filter(|r| r.is_finite())
+                && best.is_none_or(|(_, _, br)| r < br)
+            {
+                best = Some((first, second, r));
+            }
+        }
+    }
+    let (first, second, r) = best?;
+    // Each beside the other, by the rules a single block joins by.
+    let joins = |a: usize, b: usize| {
+        let mut with = chosen.to_vec();
+        with.push(a);
+        let rss_a = left(&[a])?;
+        let residual = left_by(lib, &with, y, w);
+        next_block(lib, &with, b..b + 1, y, w, rss_a, &residual)
+    };
+    (joins(first, second).is_some() && joins(second, first).is_some() && r < rss)
+        .then_some((first, second, r))
+}
+
 /// `v` minus its weighted least-squares fit on `cols`: the part of `v`
 /// orthogonal to them (left as it is when they are degenerate).
 fn orthogonalise(cols: &[&[f64]], v: &mut [f64], w: &[f64]) {
@@ -1601,6 +1731,88 @@ fn lib_col<'a>(lib: &'a [Block], chosen: &[usize], i: usize) -> &'a [f64] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_sign_law_that_an_input_switches_is_a_product_of_the_input_with_the_sign() {
+        // A diode's drop while a switch is open: 0.7 (1 − m) tanh(i/0.05), m a duty cycle
+        // between 0.2 and 0.8, the current crossing zero; the estimate's noise 2 mV.
+        let n = 3000;
+        let t: Vec<f64> = (0..n).map(|k| k as f64 * 1e-3).collect();
+        let i: Vec<f64> = t.iter().map(|&s| 2.0 * (7.0 * s).sin() + 0.5).collect();
+        let m: Vec<f64> = t.iter().map(|&s| 0.5 + 0.3 * (2.3 * s).sin()).collect();
+        let mut noise = 0x2545_f491_4f6c_dd1d_u64;
+        let value: Vec<f64> = (0..n)
+            .map(|k| {
+                noise ^= noise << 13;
+                noise ^= noise >> 7;
+                noise ^= noise << 17;
+                let u = (noise >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+                0.7 * (1.0 - m[k]) * (i[k] / 0.05).tanh() + 0.002 * 3.46 * u
+            })
+            .collect();
+        let signal = |name: &str, label: &str, unit: &str, role, values: &[f64]| ActingSignal {
+            name: name.into(),
+            label: label.into(),
+            unit: unit.into(),
+            role,
+            values: values.to_vec(),
+        };
+        let place = MissingSignal {
+            location: "1L".into(),
+            place: "the inductor's loop (1L)".into(),
+            quantity: Quantity::Effort,
+            unit: "V".into(),
+            t,
+            value,
+            band: vec![0.002; n],
+            acting: vec![
+                signal("1L.f", "current", "A", SignalRole::Flow, &i),
+                signal("m", "input m", "1", SignalRole::Input, &m),
+            ],
+            explained: 1.0,
+        };
+        let law = screen(&place).expect("a law");
+        // (A third term may mend the width's grid, 0.0552 A for 0.05: the confirming fit
+        // frees the width and drops what it does not need.)
+        assert!(law.terms.len() <= 3, "{}", law.describe());
+        let sign = (law.terms.iter())
+            .find(|t| t.expr == "tanh(1L.f / §)")
+            .unwrap_or_else(|| panic!("{}", law.describe()));
+        let switched = (law.terms.iter())
+            .find(|t| t.expr == "m * tanh(1L.f / §)")
+            .unwrap_or_else(|| panic!("{}", law.describe()));
+        assert!(
+            (sign.coefficient / 0.7 - 1.0).abs() < 0.05,
+            "{}",
+            law.describe()
+        );
+        assert!(
+            (switched.coefficient / -0.7 - 1.0).abs() < 0.05,
+            "{}",
+            law.describe()
+        );
+        assert_eq!(switched.family, Family::Product);
+        assert_eq!(switched.unit, "V");
+        // A drop the switch does not take away, the input still acting: one sign term.
+        let mut plain = place.clone();
+        plain.value = (i.iter().zip(&place.value).zip(&m))
+            .map(|((x, v), mk)| v - 0.7 * (1.0 - mk) * (x / 0.05).tanh() + 0.35 * (x / 0.05).tanh())
+            .collect();
+        let law = screen(&plain).expect("a law");
+        assert!(
+            law.terms.iter().all(|t| t.family != Family::Product),
+            "{}",
+            law.describe()
+        );
+        let sign = (law.terms.iter())
+            .find(|t| t.family == Family::Sign)
+            .unwrap_or_else(|| panic!("{}", law.describe()));
+        assert!(
+            (sign.coefficient / 0.35 - 1.0).abs() < 0.05,
+            "{}",
+            law.describe()
+        );
+    }
 
     #[test]
     fn a_negative_term_joins_the_law_with_a_minus_sign() {
