@@ -44,6 +44,12 @@ struct Hidden {
     /// rad). The motor keeps `J` less that inertia; the load is driven through
     /// a Hunt–Crossley contact (`k δ^1.5 + λ δ^1.5 δ̇`) once the gap closes.
     backlash: Option<(f64, f64)>,
+    /// The torque constant varies around a turn, `K (1 + a sin nθ)`: (a, n) — a torque
+    /// ripple in proportion to the current (a winding's field that is not sinusoidal).
+    torque_ripple: Option<(f64, f64)>,
+    /// The back-EMF follows the same `K (1 + a sin nθ)` (what energy conservation asks of
+    /// a winding's torque ripple).
+    emf_ripple: bool,
 }
 
 /// The Hunt–Crossley contact of the backlash case: stiffness (N m/rad^1.5)
@@ -100,9 +106,13 @@ fn derivative(h: &Hidden, v: f64, t: f64, x: [f64; 7]) -> [f64; 7] {
     } else {
         0.0
     };
+    let ripple = h
+        .torque_ripple
+        .map_or(1.0, |(a, n)| 1.0 + a * (n * x[2]).sin());
+    let k_emf = if h.emf_ripple { K * ripple } else { K };
     [
-        vd - r * i - K * w,
-        K * i - BETA * w - extra - contact,
+        vd - r * i - k_emf * w,
+        K * ripple * i - BETA * w - extra - contact,
         w,
         r * i * i,
         sensor,
@@ -245,6 +255,21 @@ fn cases() -> Vec<(&'static str, Hidden)> {
             "cogging 6",
             Hidden {
                 torque: Some(|_, th, _| 0.008 * (6.0 * th).sin()),
+                ..Hidden::default()
+            },
+        ),
+        (
+            "torque ripple 6, 10 % of K i",
+            Hidden {
+                torque_ripple: Some((0.1, 6.0)),
+                ..Hidden::default()
+            },
+        ),
+        (
+            "winding ripple 6, 10 % (torque and EMF)",
+            Hidden {
+                torque_ripple: Some((0.1, 6.0)),
+                emf_ripple: true,
                 ..Hidden::default()
             },
         ),
@@ -498,6 +523,63 @@ fn a_dead_zone_in_the_driver_is_named_with_its_width() {
     let (ids, params, text) = chosen(&ex);
     assert_eq!(ids, ["deadzone@V"], "{text}");
     within(value(&params, "delta", &text), 0.5, 0.05, &text);
+}
+
+#[test]
+fn a_torque_ripple_in_proportion_to_the_current_is_the_current_times_a_harmonic() {
+    // K (1 + 0.1 sin 6θ) i on the shaft: the missing torque is 0.1 K i sin 6θ, read
+    // where it acts with the winding's current one gyrator away (the law's effort is
+    // counted against the shaft's motion, as a friction's: −0.1 K).
+    let ex = explained(&record(
+        &case("torque ripple 6, 10 % of K i"),
+        2e-3,
+        0.0,
+        21,
+    ));
+    let (ids, params, text) = chosen(&ex);
+    assert_eq!(ids.len(), 1, "{text}");
+    assert!(
+        ids[0].starts_with("law@1m:") && ids[0].contains("* sin(6 *"),
+        "{text}"
+    );
+    within(value(&params, "c_6sin", &text), -0.1 * K, 0.05, &text);
+    at_floor(&ex, &text);
+}
+
+#[test]
+fn a_winding_whose_constant_varies_around_a_turn_is_named_a_ripple_of_the_gyrator() {
+    // K (1 + 0.1 sin 6θ) in the torque and the back-EMF alike: one effect at both ends
+    // of the gyrator, where a law at either place sees half of it.
+    let rec = record(
+        &case("winding ripple 6, 10 % (torque and EMF)"),
+        2e-3,
+        0.0,
+        22,
+    );
+    let (ids, _, text) = chosen(&explained(&rec));
+    assert_eq!(ids, ["ripple@k"], "{text}");
+    // The current's third differences carry the ripple itself, so its floor is suspect and
+    // the verdict partial; with the sensors' noise as their maker states it (2e-3 of each
+    // range), the ripple explains the recording.
+    let noise = ["i", "omega"].map(|name| {
+        let y = &rec.signal(name).unwrap().values;
+        (
+            name.to_string(),
+            2e-3 * y.iter().fold(0.0_f64, |m, v| m.max(v.abs())),
+        )
+    });
+    let opts = ExplainOptions {
+        noise: noise.into_iter().collect(),
+        ..ExplainOptions::default()
+    };
+    let ex = explain(&motor_model(), &rec, &opts).unwrap();
+    let (ids, params, text) = chosen(&ex);
+    assert_eq!(ids, ["ripple@k"], "{text}");
+    within(value(&params, "a_rip_s", &text), 0.1, 0.05, &text);
+    within(value(&params, "N_rip", &text), 6.0, 0.01, &text);
+    assert!(value(&params, "a_rip_c", &text).abs() < 0.005, "{text}");
+    at_floor(&ex, &text);
+    assert_eq!(ex.verdict, Verdict::EffectFound, "{text}");
 }
 
 #[test]

@@ -309,6 +309,24 @@ fn augmented(
                     )?;
                 }
             }
+            for j in coupled_junctions(graph, p.id) {
+                let domain = Junction::of(graph, j).map(|d| d.domain);
+                let word = match domain {
+                    Some(Domain::Rotational) => "speed",
+                    Some(Domain::Translational) => "velocity",
+                    Some(Domain::Electrical) => "current",
+                    None => "flow",
+                };
+                let jname = graph.element(j).name.clone();
+                add(
+                    &mut g,
+                    Measured::Flow(jname.clone()),
+                    format!("{word} of {}", place(graph, j)),
+                    domain.map_or(String::new(), |d| d.flow_unit().to_string()),
+                    signal_name(&jname, "f"),
+                    SignalRole::Coupled,
+                )?;
+            }
         }
         Quantity::Flow => {
             add(
@@ -323,6 +341,28 @@ fn augmented(
     }
     let cm = CompiledModel::new(&g).ok()?;
     Some((cm, acting))
+}
+
+/// The 1-junctions one gyrator or transformer away from the 1-junction `id`
+/// (the winding's loop of a motor, seen from its shaft), each once.
+fn coupled_junctions(g: &BondGraph, id: ElementId) -> Vec<ElementId> {
+    let mut out: Vec<ElementId> = Vec::new();
+    for (b, _) in g.ports(id) {
+        let t = g.other_end(b, id);
+        if !matches!(
+            g.element(t).kind,
+            ElementKind::Gy | ElementKind::Tf | ElementKind::Mgy | ElementKind::Mtf
+        ) {
+            continue;
+        }
+        for (c, _) in g.ports(t) {
+            let j = g.other_end(c, t);
+            if j != id && g.element(j).kind == ElementKind::One && !out.contains(&j) {
+                out.push(j);
+            }
+        }
+    }
+    out
 }
 
 /// One place's estimate, and each measured output's noise σ the smoother used:

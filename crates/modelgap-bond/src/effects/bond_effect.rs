@@ -10,9 +10,9 @@ use super::tag::Tag;
 use super::{
     ActuatorDelay, ActuatorGain, ActuatorLag, ActuatorLimit, ActuatorOffset, Backlash, Brush,
     Calibration, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault, Faulted,
-    Heating, Inertia, Inflow, Junction, LawEffect, Leak, Load, Node, Orifice, Overflow, PowerLoss,
-    Saturation, SensorClip, SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness, Store,
-    Viscous,
+    Heating, Inertia, Inflow, Junction, LawEffect, Leak, Load, ModulusRipple, Node, Orifice,
+    Overflow, PowerLoss, Saturation, SensorClip, SensorDelay, SensorLag, SensorOffset, SensorScale,
+    Stiffness, Store, Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::{BondGraph, ElementId};
@@ -45,6 +45,8 @@ pub enum BondEffect {
     Brush(Brush),
     /// `saturation@<I>`: magnetic saturation.
     Saturation(Saturation),
+    /// `ripple@<GY>`: a motor constant that varies around a turn.
+    Ripple(ModulusRipple),
     /// `heating@<R>`: a resistance that rises with the energy it dissipates.
     Heating(Heating),
     /// `stiffness@<C>`: a cubic term in a C's law.
@@ -128,6 +130,12 @@ from_kind!(
     Declared,
     Calibration
 );
+
+impl From<ModulusRipple> for BondEffect {
+    fn from(k: ModulusRipple) -> BondEffect {
+        BondEffect::Ripple(k)
+    }
+}
 
 impl From<PowerLoss> for BondEffect {
     fn from(k: PowerLoss) -> BondEffect {
@@ -262,6 +270,19 @@ impl BondEffect {
                 let s =
                     s.ok_or_else(|| bad(c, "", format!("the model has no I element '{target}'")))?;
                 Some(BondEffect::Saturation(s))
+            }
+            Tag::Ripple => {
+                let r = g.find(target).and_then(|id| ModulusRipple::at(g, id));
+                let r = r.ok_or_else(|| {
+                    bad(
+                        c,
+                        "",
+                        format!(
+                            "'{target}' is not a GY of the model with a linear modulus bonded to a rotational 1-junction"
+                        ),
+                    )
+                })?;
+                Some(BondEffect::Ripple(r))
             }
             Tag::Heating => {
                 let h = g.find(target).and_then(|id| Heating::at(g, id));
@@ -410,6 +431,7 @@ impl BondEffect {
             BondEffect::Cogging(k) => k,
             BondEffect::Brush(k) => k,
             BondEffect::Saturation(k) => k,
+            BondEffect::Ripple(k) => k,
             BondEffect::Heating(k) => k,
             BondEffect::Stiffness(k) => k,
             BondEffect::Leak(k) => k,
@@ -451,6 +473,7 @@ impl BondEffect {
             | BondEffect::Factor(_)
             | BondEffect::Fault(_)
             | BondEffect::Saturation(_)
+            | BondEffect::Ripple(_)
             | BondEffect::Heating(_)
             | BondEffect::Stiffness(_)
             | BondEffect::Leak(_)
@@ -519,6 +542,7 @@ impl BondEffect {
             Tag::Cogging => Cogging::vanishing_values(c),
             Tag::Brush => Brush::vanishing_values(c),
             Tag::Saturation => Saturation::vanishing_values(c),
+            Tag::Ripple => ModulusRipple::vanishing_values(c),
             Tag::Heating => Heating::vanishing_values(c),
             Tag::Stiffness => Stiffness::vanishing_values(c),
             Tag::Leak => Leak::vanishing_values(c),

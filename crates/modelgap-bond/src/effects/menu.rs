@@ -9,8 +9,8 @@ use super::scales::Scales;
 use super::{
     ActuatorDelay, ActuatorGain, ActuatorLag, ActuatorLimit, ActuatorOffset, Backlash, Brush,
     Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault, Heating, Inertia,
-    Inflow, Leak, Load, Orifice, Overflow, PowerLoss, Saturation, SensorClip, SensorDelay,
-    SensorLag, SensorOffset, SensorScale, Stiffness, Store, Viscous,
+    Inflow, Leak, Load, ModulusRipple, Orifice, Overflow, PowerLoss, Saturation, SensorClip,
+    SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness, Store, Viscous,
 };
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
@@ -130,6 +130,7 @@ pub fn offered(g: &BondGraph) -> Vec<BondEffect> {
     on_junctions.sort_by_key(|e| e.junction().map(|j| j.id));
     out.extend(on_junctions);
     out.extend(of::<Saturation>(g));
+    out.extend(of::<ModulusRipple>(g));
     out.extend(of::<Heating>(g));
     out.extend(of::<Stiffness>(g));
     // Storage nodes, node by node.

@@ -54,7 +54,9 @@
 //! - on junctions: [`viscous`](Viscous), [`coulomb`](Coulomb), [`load`](Load),
 //!   [`inertia`](Inertia), [`coupling`](Coupling), [`backlash`](Backlash),
 //!   [`cogging`](Cogging),
-//!   [`brush`](Brush); on an I: [`saturation`](Saturation); on an electrical R:
+//!   [`brush`](Brush); on an I: [`saturation`](Saturation); on a GY between a
+//!   winding and a shaft: [`ripple`](ModulusRipple) (its modulus varies around a
+//!   turn: a torque and back-EMF ripple); on an electrical R:
 //!   [`heating`](Heating) (it rises with the energy it dissipates); on a C, in any
 //!   domain: [`stiffness`](Stiffness) (a cubic term); on storage nodes
 //!   ([`Node`]: a 0-junction with a C, any domain): [`leak`](Leak),
@@ -121,6 +123,7 @@ mod offset;
 mod orifice;
 mod overflow;
 mod power;
+mod ripple;
 mod saturation;
 mod scale;
 mod scales;
@@ -172,6 +175,7 @@ pub use offset::SensorOffset;
 pub use orifice::Orifice;
 pub use overflow::Overflow;
 pub use power::PowerLoss;
+pub use ripple::ModulusRipple;
 pub use saturation::Saturation;
 pub use scale::SensorScale;
 pub use scales::Scales;

@@ -56,6 +56,12 @@ pub enum SignalRole {
     Effort,
     /// An input of the model, as recorded.
     Input,
+    /// The flow of a place one transducer (a gyrator or transformer) away,
+    /// read where the effort is missing: the winding's current at a motor's
+    /// shaft. It scales a law there (a torque ripple in proportion to the
+    /// current, `i·sin nθ`), so it enters the products only: alone it is the
+    /// transducer's own modulus, which the menu offers.
+    Coupled,
 }
 
 impl SignalRole {

@@ -17,7 +17,7 @@
 //! | square root | `√max(e, 0)` | node efforts (an orifice) |
 //! | power | `sign(e)·|e|^p`, p scanned over 0.3 … 3 | node efforts (seepage, convection) |
 //! | harmonics | `sin nθ`, `cos nθ`, every n in 1..=24 at once | angles |
-//! | product | `a·b`, `a·|b|`, `a²·b` of two signals; `b·sin nθ`, `b·cos nθ` for n in 1..=12; an input times a signal, `u·b`, or a flow's sign, `u·tanh(f/ε)` | flows, positions, displacements, efforts, angles, inputs |
+//! | product | `a·b`, `a·|b|`, `a²·b` of two signals; `b·sin nθ`, `b·cos nθ` for n in 1..=12; an input times a signal, `u·b`, or a flow's sign, `u·tanh(f/ε)` | flows, positions, displacements, efforts, angles, inputs, the flow one transducer away (`i·sin nθ` at a shaft) |
 //! | ripple | `sin(2πx/λ)`, `cos(2πx/λ)`, λ scanned over 1/100 … 1/2 of the travel | positions |
 //! | step | `H(t − t₀)`, t₀ scanned | time |
 //! | ramp | `max(t − t₀, 0)`, t₀ scanned | time |
@@ -914,6 +914,8 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
                 let y: Vec<f64> = idx.iter().map(|&k| m.value[k]).collect();
                 out.extend(quantisers(&y, a, &v, eu));
             }
+            // Alone, a flow one transducer away is the transducer's modulus: it scales.
+            SignalRole::Coupled => {}
         }
     }
     out.extend(products(m, idx));
@@ -973,7 +975,8 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
 /// The product family: for every two signals acting at the place (flows,
 /// positions, displacements, efforts), `a·b`, `a·|b|`, `|a|·b`, `a²·b` and
 /// `a·b²` (each odd in one of them, so that it is not a constant in
-/// disguise), and for an angle with every other signal, `b·sin nθ` and
+/// disguise) — a flow one transducer away among them, the winding's current
+/// at a shaft — and for an angle with every other signal, `b·sin nθ` and
 /// `b·cos nθ` (n in 1..=[`MAX_PRODUCT_HARMONIC`]), and for an input `u`
 /// with every signal, `u·b` and, with a flow, `u·tanh(f/ε)` over the sign's
 /// widths. One family, one member per law: its size is the
@@ -985,7 +988,7 @@ fn products(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
         s.is_finite() && s > 0.0
     };
     let plain: Vec<&ActingSignal> = (m.acting.iter())
-        .filter(|a| a.role.is_plain())
+        .filter(|a| a.role.is_plain() || a.role == SignalRole::Coupled)
         .filter(varying)
         .collect();
     let angles: Vec<&ActingSignal> = (m.acting.iter())
