@@ -385,6 +385,22 @@ fn case(name: &str) -> Hidden {
         .unwrap()
 }
 
+/// Explain's options with the sensors' noise as their maker states it (2e-3 of
+/// each range), instead of the floor estimated from the data.
+fn makers_noise(rec: &Recording) -> ExplainOptions {
+    let noise = ["i", "omega"].map(|name| {
+        let y = &rec.signal(name).unwrap().values;
+        (
+            name.to_string(),
+            2e-3 * y.iter().fold(0.0_f64, |m, v| m.max(v.abs())),
+        )
+    });
+    ExplainOptions {
+        noise: noise.into_iter().collect(),
+        ..ExplainOptions::default()
+    }
+}
+
 fn within(value: f64, truth: f64, tolerance: f64, text: &str) {
     assert!(
         (value - truth).abs() <= tolerance * truth.abs(),
@@ -407,19 +423,7 @@ fn at_floor(ex: &Explanation, text: &str) {
 #[test]
 fn backlash_in_the_drive_is_named_with_its_gap_and_the_inertia_behind_it() {
     let rec = record(&case("backlash 0.03 rad"), 2e-3, 0.0, 17);
-    // The sensors' noise, as their maker states it (2e-3 of each range).
-    let noise = ["i", "omega"].map(|name| {
-        let y = &rec.signal(name).unwrap().values;
-        (
-            name.to_string(),
-            2e-3 * y.iter().fold(0.0_f64, |m, v| m.max(v.abs())),
-        )
-    });
-    let opts = ExplainOptions {
-        noise: noise.into_iter().collect(),
-        ..ExplainOptions::default()
-    };
-    let ex = explain(&motor_model(), &rec, &opts).unwrap();
+    let ex = explain(&motor_model(), &rec, &makers_noise(&rec)).unwrap();
     let (ids, _, text) = chosen(&ex);
     println!("{text}");
     // The generator's contact is Hunt–Crossley (k δ^1.5 with damping λ δ^1.5 δ̇), the
@@ -561,18 +565,7 @@ fn a_winding_whose_constant_varies_around_a_turn_is_named_a_ripple_of_the_gyrato
     // The current's third differences carry the ripple itself, so its floor is suspect and
     // the verdict partial; with the sensors' noise as their maker states it (2e-3 of each
     // range), the ripple explains the recording.
-    let noise = ["i", "omega"].map(|name| {
-        let y = &rec.signal(name).unwrap().values;
-        (
-            name.to_string(),
-            2e-3 * y.iter().fold(0.0_f64, |m, v| m.max(v.abs())),
-        )
-    });
-    let opts = ExplainOptions {
-        noise: noise.into_iter().collect(),
-        ..ExplainOptions::default()
-    };
-    let ex = explain(&motor_model(), &rec, &opts).unwrap();
+    let ex = explain(&motor_model(), &rec, &makers_noise(&rec)).unwrap();
     let (ids, params, text) = chosen(&ex);
     assert_eq!(ids, ["ripple@k"], "{text}");
     within(value(&params, "a_rip_s", &text), 0.1, 0.05, &text);

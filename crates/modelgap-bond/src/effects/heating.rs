@@ -5,7 +5,7 @@ use modelgap_core::{Candidate, EffectKind, EffectParam};
 
 use super::def::{EffectDef, all_zero};
 use super::edit::{added, bad, ident, law, new_param};
-use super::menu::{head, law_value};
+use super::menu::{law_value, linear_element_words};
 use super::scales::Scales;
 use super::tag::Tag;
 use super::{Domain, Junction};
@@ -88,15 +88,7 @@ impl EffectDef for Heating {
         if !(energy.is_finite() && energy > 0.0) {
             energy = 1.0;
         }
-        let what = match &el.law {
-            Law::Linear(Expr::Param(n)) => g
-                .params()
-                .get(n)
-                .map(|p| head(&p.description).to_string())
-                .filter(|s| !s.is_empty())
-                .map_or_else(|| n.clone(), |h| format!("{h} ({n})")),
-            _ => el.name.clone(),
-        };
+        let what = linear_element_words(g, self.element);
         Candidate {
             id: Tag::Heating.id(&el.name),
             name: format!("heating of {what}: it rises with the energy it dissipates"),

@@ -12,6 +12,7 @@ use super::{
     Inflow, Leak, Load, ModulusRipple, Orifice, Overflow, PowerLoss, Saturation, SensorClip,
     SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness, Store, Viscous,
 };
+use crate::element::Law;
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
 
@@ -179,6 +180,22 @@ pub(super) fn head(description: &str) -> &str {
         .min()
         .unwrap_or(description.len());
     description[..cut].trim()
+}
+
+/// What an element with a linear law is, in words: its parameter's
+/// description and name ("armature resistance (R)"), else the parameter's
+/// name, else the element's.
+pub(super) fn linear_element_words(g: &BondGraph, id: ElementId) -> String {
+    let el = g.element(id);
+    match &el.law {
+        Law::Linear(Expr::Param(n)) => g
+            .params()
+            .get(n)
+            .map(|p| head(&p.description).to_string())
+            .filter(|s| !s.is_empty())
+            .map_or_else(|| n.clone(), |h| format!("{h} ({n})")),
+        _ => el.name.clone(),
+    }
 }
 
 /// "the shaft (1m)" from a junction's description, or "junction 1m".

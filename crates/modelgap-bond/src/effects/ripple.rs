@@ -4,7 +4,7 @@ use modelgap_core::{Candidate, EffectKind, EffectParam};
 
 use super::def::EffectDef;
 use super::edit::{added, attach, bad, ident, law, new_param};
-use super::menu::head;
+use super::menu::linear_element_words;
 use super::scales::Scales;
 use super::tag::Tag;
 use super::{Domain, Junction};
@@ -31,8 +31,7 @@ const RIPPLE_BOUND: f64 = 0.5;
 /// is not sinusoidal gives a torque ripple in proportion to the current and,
 /// by the same modulus, a ripple of the back-EMF in proportion to the speed
 /// — one effect acting at both ends, where a law at one place sees half of
-/// it. `a_s`, `a_c` in ±[`RIPPLE_BOUND`], `N` in [`ORDERS`], started at
-/// every whole order.
+/// it. `a_s`, `a_c` in ±0.5, `N` in [1, 12], started at every whole order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ModulusRipple {
     /// The gyrator (a GY with a linear modulus).
@@ -65,15 +64,7 @@ impl EffectDef for ModulusRipple {
 
     fn candidate(&self, g: &BondGraph, _scales: &Scales) -> Candidate {
         let el = g.element(self.element);
-        let what = match &el.law {
-            Law::Linear(Expr::Param(n)) => g
-                .params()
-                .get(n)
-                .map(|p| head(&p.description).to_string())
-                .filter(|s| !s.is_empty())
-                .map_or_else(|| n.clone(), |h| format!("{h} ({n})")),
-            _ => el.name.clone(),
-        };
+        let what = linear_element_words(g, self.element);
         let shaft = g.element(self.shaft).name.clone();
         Candidate {
             id: Tag::Ripple.id(&el.name),

@@ -10,12 +10,11 @@ use modelgap_core::{Candidate, EffectKind, EffectParam};
 use super::Domain;
 use super::def::EffectDef;
 use super::edit::{bad, ident, law, new_param};
-use super::menu::{head, law_value};
+use super::menu::{law_value, linear_element_words};
 use super::scales::Scales;
 use super::tag::Tag;
 use crate::element::{ElementKind, Law};
 use crate::error::Result;
-use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
 use crate::simulate::ParamChange;
 
@@ -80,15 +79,7 @@ impl EffectDef for Saturation {
             })
             .unwrap_or(1.0);
         let a = 1.0 / (p_peak * p_peak);
-        let what = match &el.law {
-            Law::Linear(Expr::Param(n)) => g
-                .params()
-                .get(n)
-                .map(|p| head(&p.description).to_string())
-                .filter(|s| !s.is_empty())
-                .map_or_else(|| n.clone(), |h| format!("{h} ({n})")),
-            _ => el.name.clone(),
-        };
+        let what = linear_element_words(g, self.element);
         Candidate {
             id: Tag::Saturation.id(&el.name),
             name: format!("magnetic saturation of {what}"),
