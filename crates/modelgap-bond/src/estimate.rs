@@ -66,6 +66,17 @@ struct Place {
     flow_word: &'static str,
 }
 
+/// What a 1-junction's flow is called in its domain: `speed`, `velocity`,
+/// `current`, or `flow` in none known.
+fn flow_word(domain: Option<Domain>) -> &'static str {
+    match domain {
+        Some(Domain::Rotational) => "speed",
+        Some(Domain::Translational) => "velocity",
+        Some(Domain::Electrical) => "current",
+        None => "flow",
+    }
+}
+
 /// The places of `g`: 1-junctions with an I bonded, 0-junctions with a C.
 fn places(g: &BondGraph) -> Vec<Place> {
     let mut out = Vec::new();
@@ -94,12 +105,7 @@ fn places(g: &BondGraph) -> Vec<Place> {
                         (!spring).then(|| (SignalRole::Displacement, String::new()))
                     }
                 };
-                let flow_word = match domain {
-                    Some(Domain::Rotational) => "speed",
-                    Some(Domain::Translational) => "velocity",
-                    Some(Domain::Electrical) => "current",
-                    None => "flow",
-                };
+                let flow_word = flow_word(domain);
                 out.push(Place {
                     id,
                     quantity: Quantity::Effort,
@@ -311,12 +317,7 @@ fn augmented(
             }
             for j in coupled_junctions(graph, p.id) {
                 let domain = Junction::of(graph, j).map(|d| d.domain);
-                let word = match domain {
-                    Some(Domain::Rotational) => "speed",
-                    Some(Domain::Translational) => "velocity",
-                    Some(Domain::Electrical) => "current",
-                    None => "flow",
-                };
+                let word = flow_word(domain);
                 let jname = graph.element(j).name.clone();
                 add(
                     &mut g,

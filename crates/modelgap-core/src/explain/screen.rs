@@ -1042,6 +1042,20 @@ fn products(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
             },
         ]
     };
+    // `x·y`, one term.
+    let product = |x: &Factor, y: &Factor| {
+        (
+            format!("{}*{}", x.expr, y.expr),
+            vec![term(
+                "c_prod",
+                Family::Product,
+                format!("{} · {}", x.label, y.label),
+                format!("{} * {}", x.expr, y.expr),
+                per(eu, &times(&x.unit, &y.unit)),
+            )],
+            vec![x.values.iter().zip(&y.values).map(|(p, q)| p * q).collect()],
+        )
+    };
     let mut blocks: Vec<(String, Vec<LawTerm>, Vec<Vec<f64>>)> = Vec::new();
     for (i, a) in plain.iter().enumerate() {
         for b in &plain[i + 1..] {
@@ -1053,17 +1067,7 @@ fn products(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
                     if !x.odd && !y.odd {
                         continue;
                     }
-                    blocks.push((
-                        format!("{}*{}", x.expr, y.expr),
-                        vec![term(
-                            "c_prod",
-                            Family::Product,
-                            format!("{} · {}", x.label, y.label),
-                            format!("{} * {}", x.expr, y.expr),
-                            per(eu, &times(&x.unit, &y.unit)),
-                        )],
-                        vec![x.values.iter().zip(&y.values).map(|(p, q)| p * q).collect()],
-                    ));
+                    blocks.push(product(x, y));
                 }
             }
         }
@@ -1115,20 +1119,10 @@ fn products(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
         .filter(varying)
         .collect();
     for u in &inputs {
-        let uv = col(u);
+        let (uf, uv) = (&factors(u)[0], col(u));
         for b in &plain {
             let bv = col(b);
-            blocks.push((
-                format!("{}*{}", u.name, b.name),
-                vec![term(
-                    "c_prod",
-                    Family::Product,
-                    format!("{} · {}", u.label, b.label),
-                    format!("{} * {}", u.name, b.name),
-                    per(eu, &times(&u.unit, &b.unit)),
-                )],
-                vec![uv.iter().zip(&bv).map(|(p, q)| p * q).collect()],
-            ));
+            blocks.push(product(uf, &factors(b)[0]));
             if b.role != SignalRole::Flow {
                 continue;
             }
@@ -1567,15 +1561,9 @@ fn next_block(
 ) -> Option<(usize, f64)> {
     let n = y.len();
     let half = n / 2;
-    let taken = |b: &Block| {
-        chosen.iter().any(|&c| {
-            let o = &lib[c];
-            o.family == b.family && (b.family != Family::Harmonic || o.member == b.member)
-        })
-    };
     let mut best: Option<(usize, f64)> = None;
     for bi in offered {
-        if taken(&lib[bi]) {
+        if taken(lib, chosen, &lib[bi]) {
             continue;
         }
         let mut trial = chosen.to_vec();
@@ -1648,6 +1636,16 @@ fn next_block(
     Some((bi, new_rss))
 }
 
+/// Whether a block of `b`'s family is among the blocks `with` already (one
+/// member per shape family; harmonics of different orders are different
+/// members).
+fn taken(lib: &[Block], with: &[usize], b: &Block) -> bool {
+    with.iter().any(|&c| {
+        let o = &lib[c];
+        o.family == b.family && (b.family != Family::Harmonic || o.member == b.member)
+    })
+}
+
 /// The firsts a pair of blocks is tried from: the blocks that alone leave least.
 const PAIR_FIRSTS: usize = 3;
 
@@ -1667,19 +1665,13 @@ fn next_pair(
     w: &[f64],
     rss: f64,
 ) -> Option<(usize, usize, f64)> {
-    let taken = |with: &[usize], b: &Block| {
-        with.iter().any(|&c| {
-            let o = &lib[c];
-            o.family == b.family && (b.family != Family::Harmonic || o.member == b.member)
-        })
-    };
     let left = |blocks: &[usize]| -> Option<f64> {
         let mut trial = chosen.to_vec();
         trial.extend_from_slice(blocks);
         wls(&design(lib, &trial), y, w).map(|(_, _, r)| r)
     };
     let mut firsts: Vec<(usize, f64)> = (0..lib.len())
-        .filter(|&b| !taken(chosen, &lib[b]))
+        .filter(|&b| !taken(lib, chosen, &lib[b]))
         .filter_map(|b| left(&[b]).filter(|r| r.is_finite()).map(|r| (b, r)))
         .collect();
     firsts.sort_by(|a, b| a.1.total_cmp(&b.1));
@@ -1687,7 +1679,7 @@ fn next_pair(
     for &(first, _) in firsts.iter().take(PAIR_FIRSTS) {
         let mut with = chosen.to_vec();
         with.push(first);
-        for second in (0..lib.len()).filter(|&b| b != first && !taken(&with, &lib[b])) {
+        for second in (0..lib.len()).filter(|&b| b != first && !taken(lib, &with, &lib[b])) {
             if let Some(r) = left(&[first, second]).filter(|r| r.is_finite())
                 && best.is_none_or(|(_, _, br)| r < br)
             {
