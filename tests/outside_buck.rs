@@ -311,6 +311,22 @@ fn a_diodes_forward_drop_is_a_sign_law_switched_by_the_duty_cycle() {
 }
 
 #[test]
+fn an_inductor_whose_flux_saturates_as_an_arctangent_is_named_with_its_flux_limit() {
+    // ψ(i) = L i_s atan(i/i_s), i_s = 2 A: the flux cannot pass L i_s π/2.
+    let rec = record(&case("inductor saturating (atan, 2 A)"), 2e-3, 0.0, 7);
+    let ex = explained(&rec);
+    let (ids, params, text) = chosen(&ex);
+    assert_eq!(ids, ["flux-limit@L"], "{text}");
+    let limit = L * 2.0 * std::f64::consts::FRAC_PI_2;
+    let psi = value(&params, "psi_lim", &text);
+    assert!(
+        (psi - limit).abs() <= 0.05 * limit,
+        "{psi} vs {limit}:\n{text}"
+    );
+    assert_eq!(ex.verdict, modelgap::Verdict::EffectFound, "{text}");
+}
+
+#[test]
 fn a_constant_power_load_is_the_symbolic_searchs_reciprocal_with_its_power_and_dropout() {
     // 2 W drawn as P/v above 3 V and as a resistor below: the formula `c u/max(u², 1)` of
     // u = v/a is that law, with P = c·a and the drop-out at a.

@@ -26,8 +26,8 @@ struct Hidden {
     driver_gain: Option<f64>,
     /// R grows as R (1 + heating · E), E = ∫ R i² dt the heat it has dissipated.
     heating: f64,
-    /// The inductor's flux saturates: ψ = L i_s tanh(i / i_s).
-    saturation_current: Option<f64>,
+    /// The inductor's flux saturates: its current at a flux ψ (Wb).
+    core: Option<fn(f64) -> f64>,
     /// The speed sensor: first-order lag τ (s).
     sensor_lag: f64,
     /// The speed sensor: quantisation step (rad/s).
@@ -71,10 +71,7 @@ fn motor_inertia(h: &Hidden) -> f64 {
 /// State: [ψ (flux of the inductor), p = J ω, θ, E = ∫ R i² dt, sensor,
 /// the load's momentum, the twist across the gap].
 fn derivative(h: &Hidden, v: f64, t: f64, x: [f64; 7]) -> [f64; 7] {
-    let i = match h.saturation_current {
-        None => x[0] / L,
-        Some(is) => is * (x[0] / (L * is)).clamp(-0.999_999, 0.999_999).atanh(),
-    };
+    let i = h.core.map_or(x[0] / L, |current| current(x[0]));
     let w = x[1] / motor_inertia(h);
     // The contact torque on the load across the gap, and the load's speed.
     let (contact, w_load) = match h.backlash {
@@ -121,6 +118,40 @@ fn derivative(h: &Hidden, v: f64, t: f64, x: [f64; 7]) -> [f64; 7] {
     ]
 }
 
+/// The saturation current of the cores below (A).
+const SATURATION_CURRENT: f64 = 4.0;
+
+/// A core whose flux saturates as `ψ = L i_s tanh(i/i_s)`: its current at a flux.
+fn tanh_core(psi: f64) -> f64 {
+    let is = SATURATION_CURRENT;
+    is * (psi / (L * is)).clamp(-0.999_999, 0.999_999).atanh()
+}
+
+/// A Frohlich core, `ψ = L i / (1 + |i|/i_s)`: its current at a flux.
+fn frohlich_core(psi: f64) -> f64 {
+    let limit = L * SATURATION_CURRENT;
+    psi / (L * (1.0 - (psi.abs() / limit).min(0.999_999)))
+}
+
+/// A core that saturates to the winding's air-core inductance, a tenth of `L`:
+/// `ψ = L i / 10 + 0.9 L i_s tanh(i/i_s)` (no flux limit). Its current at a flux,
+/// by Newton's method from the air core's current (the flux grows at least as
+/// `L/10` per ampere, so each step lands at or before the root).
+fn air_core(psi: f64) -> f64 {
+    let is = SATURATION_CURRENT;
+    let flux = |i: f64| 0.1 * L * i + 0.9 * L * is * (i / is).tanh();
+    let slope = |i: f64| 0.1 * L + 0.9 * L / (i / is).cosh().powi(2);
+    let mut i = psi / L;
+    for _ in 0..60 {
+        let step = (flux(i) - psi) / slope(i);
+        i -= step;
+        if step.abs() <= 1e-13 * i.abs().max(1.0) {
+            break;
+        }
+    }
+    i
+}
+
 fn drive(t: f64) -> f64 {
     use std::f64::consts::TAU;
     6.0 * (TAU * 0.7 * t).sin() + 2.0 * (TAU * 3.3 * t).sin() + 1.0 * (TAU * 11.0 * t).sin()
@@ -135,10 +166,7 @@ fn record(h: &Hidden, white: f64, coloured: f64, seed: u64) -> Recording {
     let (mut ti, mut om, mut vs, mut ts) = (vec![], vec![], vec![], vec![]);
     for k in 0..=n {
         let t = k as f64 * dt;
-        let i = match h.saturation_current {
-            None => x[0] / L,
-            Some(is) => is * (x[0] / (L * is)).clamp(-0.999_999, 0.999_999).atanh(),
-        };
+        let i = h.core.map_or(x[0] / L, |current| current(x[0]));
         let w = if h.sensor_lag > 0.0 {
             x[4]
         } else {
@@ -297,7 +325,21 @@ fn cases() -> Vec<(&'static str, Hidden)> {
         (
             "saturation tanh",
             Hidden {
-                saturation_current: Some(4.0),
+                core: Some(tanh_core),
+                ..Hidden::default()
+            },
+        ),
+        (
+            "saturation Frohlich",
+            Hidden {
+                core: Some(frohlich_core),
+                ..Hidden::default()
+            },
+        ),
+        (
+            "saturation to an air core",
+            Hidden {
+                core: Some(air_core),
                 ..Hidden::default()
             },
         ),
@@ -486,6 +528,27 @@ fn an_eccentric_mass_under_coloured_noise_is_a_first_harmonic_of_the_angle() {
         "phase {}:\n{text}",
         c.atan2(s)
     );
+}
+
+#[test]
+fn a_core_that_saturates_towards_a_flux_limit_is_named_with_its_limit() {
+    // A Frohlich core, ψ = L i / (1 + |i|/i_s): its current is p/L (1 − |p|/(L i_s))^-1,
+    // the family's n = 1, m = 1, and the flux it cannot pass is L i_s.
+    let limit = L * SATURATION_CURRENT;
+    let ex = explained(&record(&case("saturation Frohlich"), 2e-3, 0.0, 21));
+    let (ids, params, text) = chosen(&ex);
+    assert_eq!(ids, ["flux-limit@L"], "{text}");
+    within(value(&params, "psi_lim", &text), limit, 0.05, &text);
+    within(value(&params, "n_lim", &text), 1.0, 0.05, &text);
+    within(value(&params, "m_lim", &text), 1.0, 0.1, &text);
+    at_floor(&ex, &text);
+    // A tanh flux, ψ = L i_s tanh(i/i_s): the same limit, a knee the family draws with
+    // n ≈ 2 and m ≈ 1/3 (the pole of atanh is logarithmic, the family's a power).
+    let ex = explained(&record(&case("saturation tanh"), 2e-3, 0.0, 22));
+    let (ids, params, text) = chosen(&ex);
+    assert_eq!(ids, ["flux-limit@L"], "{text}");
+    within(value(&params, "psi_lim", &text), limit, 0.1, &text);
+    at_floor(&ex, &text);
 }
 
 #[test]

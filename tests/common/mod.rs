@@ -63,8 +63,12 @@ pub fn value(params: &[(String, f64)], name: &str, text: &str) -> f64 {
 }
 
 /// Explains one case of a battery and prints its row with the time it took
-/// (and the whole text when the `PROBE` environment variable names the case).
+/// (and the whole text when the `PROBE` environment variable names the case;
+/// with `ONLY` set, only the cases whose name contains it).
 pub fn print_row(name: &str, explain: impl FnOnce() -> Explanation) {
+    if std::env::var("ONLY").is_ok_and(|o| !name.contains(&o)) {
+        return;
+    }
     let t0 = std::time::Instant::now();
     let ex = explain();
     println!(

@@ -143,6 +143,7 @@ fn candidates_have_finite_bounds_around_the_initial_value_and_a_positive_scale()
         "cogging@1m",
         "brush@1e",
         "saturation@L",
+        "flux-limit@L",
         "ripple@k",
     ] {
         assert!(dc.iter().any(|c| c == id), "dc-motor lacks {id}");

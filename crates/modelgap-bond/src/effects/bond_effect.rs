@@ -10,9 +10,9 @@ use super::tag::Tag;
 use super::{
     ActuatorDelay, ActuatorGain, ActuatorLag, ActuatorLimit, ActuatorOffset, Backlash, Brush,
     Calibration, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault, Faulted,
-    Heating, Inertia, Inflow, Junction, LawEffect, Leak, Load, ModulusRipple, Node, Orifice,
-    Overflow, PowerLoss, Saturation, SensorClip, SensorDelay, SensorLag, SensorOffset, SensorScale,
-    Stiffness, Store, Viscous,
+    FluxLimit, Heating, Inertia, Inflow, Junction, LawEffect, Leak, Load, ModulusRipple, Node,
+    Orifice, Overflow, PowerLoss, Saturation, SensorClip, SensorDelay, SensorLag, SensorOffset,
+    SensorScale, Stiffness, Store, Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::{BondGraph, ElementId};
@@ -45,6 +45,8 @@ pub enum BondEffect {
     Brush(Brush),
     /// `saturation@<I>`: magnetic saturation.
     Saturation(Saturation),
+    /// `flux-limit@<I>`: magnetic saturation towards a limiting flux.
+    FluxLimit(FluxLimit),
     /// `ripple@<GY>`: a motor constant that varies around a turn.
     Ripple(ModulusRipple),
     /// `heating@<R>`: a resistance that rises with the energy it dissipates.
@@ -116,6 +118,7 @@ from_kind!(
     Cogging,
     Brush,
     Saturation,
+    FluxLimit,
     Heating,
     Stiffness,
     Leak,
@@ -270,6 +273,12 @@ impl BondEffect {
                 let s =
                     s.ok_or_else(|| bad(c, "", format!("the model has no I element '{target}'")))?;
                 Some(BondEffect::Saturation(s))
+            }
+            Tag::FluxLimit => {
+                let s = g.find(target).and_then(|id| FluxLimit::at(g, id));
+                let s =
+                    s.ok_or_else(|| bad(c, "", format!("the model has no I element '{target}'")))?;
+                Some(BondEffect::FluxLimit(s))
             }
             Tag::Ripple => {
                 let r = g.find(target).and_then(|id| ModulusRipple::at(g, id));
@@ -431,6 +440,7 @@ impl BondEffect {
             BondEffect::Cogging(k) => k,
             BondEffect::Brush(k) => k,
             BondEffect::Saturation(k) => k,
+            BondEffect::FluxLimit(k) => k,
             BondEffect::Ripple(k) => k,
             BondEffect::Heating(k) => k,
             BondEffect::Stiffness(k) => k,
@@ -473,6 +483,7 @@ impl BondEffect {
             | BondEffect::Factor(_)
             | BondEffect::Fault(_)
             | BondEffect::Saturation(_)
+            | BondEffect::FluxLimit(_)
             | BondEffect::Ripple(_)
             | BondEffect::Heating(_)
             | BondEffect::Stiffness(_)
@@ -542,6 +553,7 @@ impl BondEffect {
             Tag::Cogging => Cogging::vanishing_values(c),
             Tag::Brush => Brush::vanishing_values(c),
             Tag::Saturation => Saturation::vanishing_values(c),
+            Tag::FluxLimit => FluxLimit::vanishing_values(c),
             Tag::Ripple => ModulusRipple::vanishing_values(c),
             Tag::Heating => Heating::vanishing_values(c),
             Tag::Stiffness => Stiffness::vanishing_values(c),

@@ -8,9 +8,9 @@ use super::def::EffectDef;
 use super::scales::Scales;
 use super::{
     ActuatorDelay, ActuatorGain, ActuatorLag, ActuatorLimit, ActuatorOffset, Backlash, Brush,
-    Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault, Heating, Inertia,
-    Inflow, Leak, Load, ModulusRipple, Orifice, Overflow, PowerLoss, Saturation, SensorClip,
-    SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness, Store, Viscous,
+    Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault, FluxLimit, Heating,
+    Inertia, Inflow, Leak, Load, ModulusRipple, Orifice, Overflow, PowerLoss, Saturation,
+    SensorClip, SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness, Store, Viscous,
 };
 use crate::element::Law;
 use crate::expr::Expr;
@@ -131,6 +131,7 @@ pub fn offered(g: &BondGraph) -> Vec<BondEffect> {
     on_junctions.sort_by_key(|e| e.junction().map(|j| j.id));
     out.extend(on_junctions);
     out.extend(of::<Saturation>(g));
+    out.extend(of::<FluxLimit>(g));
     out.extend(of::<ModulusRipple>(g));
     out.extend(of::<Heating>(g));
     out.extend(of::<Stiffness>(g));

@@ -54,7 +54,8 @@
 //! - on junctions: [`viscous`](Viscous), [`coulomb`](Coulomb), [`load`](Load),
 //!   [`inertia`](Inertia), [`coupling`](Coupling), [`backlash`](Backlash),
 //!   [`cogging`](Cogging),
-//!   [`brush`](Brush); on an I: [`saturation`](Saturation); on a GY between a
+//!   [`brush`](Brush); on an I: [`saturation`](Saturation) (the current grows by a power of the
+//!   flux) and [`flux-limit`](FluxLimit) (towards a flux the core cannot pass); on a GY between a
 //!   winding and a shaft: [`ripple`](ModulusRipple) (its modulus varies around a
 //!   turn: a torque and back-EMF ripple); on an electrical R:
 //!   [`heating`](Heating) (it rises with the energy it dissipates); on a C, in any
@@ -107,6 +108,7 @@ mod domain;
 mod edit;
 mod factor;
 mod fault;
+mod flux_limit;
 mod gain;
 mod heating;
 mod inertia;
@@ -158,6 +160,7 @@ pub use domain::Domain;
 pub(crate) use edit::attach;
 pub use factor::Factor;
 pub use fault::{Fault, Faulted};
+pub use flux_limit::FluxLimit;
 pub use gain::ActuatorGain;
 pub use heating::Heating;
 pub use inertia::Inertia;

@@ -21,8 +21,8 @@ use crate::simulate::ParamChange;
 /// Magnetic saturation of an electrical I with a linear law: its law
 /// becomes `f = p / L · (1 + a_sat p²)^m`, `a_sat` ≥ 0 in 1/Wb² and `m` in
 /// [1, 6]: with `m = 1` the current grows by a cube of the flux, with larger
-/// `m` it turns up more sharply as the core saturates (a flux `L i_s tanh(i/i_s)`
-/// or `L i_s atan(i/i_s)` reaches a limit the cube approaches too slowly).
+/// `m` it turns up more sharply as the core saturates. A flux that reaches a
+/// limit (`L i_s tanh(i/i_s)`, `L i_s atan(i/i_s)`) is [`FluxLimit`](super::FluxLimit)'s.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Saturation {
     /// The I element.
@@ -51,6 +51,20 @@ impl Saturation {
         }
         law_value(g, x).filter(|v| *v > 0.0)
     }
+
+    /// The peak flux of the model's run (a start-up's, or the recording's),
+    /// else `L` times the junction's flow scale.
+    pub(super) fn peak_flux(self, g: &BondGraph, scales: &Scales) -> f64 {
+        let id = self.element;
+        let l = self.inductance(g).unwrap_or(1.0);
+        (scales.state_peak.get(&id).copied())
+            .filter(|p| *p > 0.0)
+            .or_else(|| {
+                let (bond, _) = *g.ports(id).first()?;
+                Some(l * scales.flow(g.other_end(bond, id)).flow())
+            })
+            .unwrap_or(1.0)
+    }
 }
 
 impl EffectDef for Saturation {
@@ -67,17 +81,7 @@ impl EffectDef for Saturation {
     fn candidate(&self, g: &BondGraph, scales: &Scales) -> Candidate {
         let id = self.element;
         let el = g.element(id);
-        let l = self.inductance(g).unwrap_or(1.0);
-        let p_peak = scales
-            .state_peak
-            .get(&id)
-            .copied()
-            .filter(|p| *p > 0.0)
-            .or_else(|| {
-                let (bond, _) = *g.ports(id).first()?;
-                Some(l * scales.flow(g.other_end(bond, id)).flow())
-            })
-            .unwrap_or(1.0);
+        let p_peak = self.peak_flux(g, scales);
         let a = 1.0 / (p_peak * p_peak);
         let what = linear_element_words(g, self.element);
         Candidate {

@@ -18,6 +18,7 @@ pub(super) enum Tag {
     Cogging,
     Brush,
     Saturation,
+    FluxLimit,
     Ripple,
     Heating,
     Stiffness,
@@ -44,7 +45,7 @@ pub(super) enum Tag {
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 34] = [
+const PREFIXES: [(Tag, &str); 35] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -56,6 +57,7 @@ const PREFIXES: [(Tag, &str); 34] = [
     (Tag::Cogging, "cogging@"),
     (Tag::Brush, "brush@"),
     (Tag::Saturation, "saturation@"),
+    (Tag::FluxLimit, "flux-limit@"),
     (Tag::Ripple, "ripple@"),
     (Tag::Heating, "heating@"),
     (Tag::Stiffness, "stiffness@"),
@@ -137,7 +139,7 @@ mod tests {
     fn the_expected_prefixes_read_as_a_list() {
         assert_eq!(
             Tag::expected(),
-            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, backlash@, cogging@, brush@, saturation@, ripple@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, power@, store@, deadzone@, gain@, limit@, actuator-lag@, actuator-delay@, actuator-offset@, lag@, offset@, clip@, scale@, delay@, declared: or law@"
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, backlash@, cogging@, brush@, saturation@, flux-limit@, ripple@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, power@, store@, deadzone@, gain@, limit@, actuator-lag@, actuator-delay@, actuator-offset@, lag@, offset@, clip@, scale@, delay@, declared: or law@"
         );
     }
 }
