@@ -231,6 +231,14 @@ fn cases() -> Vec<(&'static str, Hidden)> {
             },
         ),
         (
+            "load pulsing at 120 Hz, 0.1 A",
+            Hidden {
+                // A load whose draw pulses at a fixed frequency (a rectifier's ripple).
+                draw: Some(|_, t| 0.1 * (std::f64::consts::TAU * 120.0 * t).sin()),
+                ..Hidden::default()
+            },
+        ),
+        (
             "inductor saturating (atan, 2 A)",
             Hidden {
                 saturation: Some(2.0),

@@ -1,12 +1,14 @@
 //! Hidden effects on a DC motor simulated by a generator that is not
 //! modelgap's: the motor's equations written out by hand and integrated with
 //! classical Runge–Kutta, each case adding one effect in a form the menu does
-//! not have (sharp or asymmetric friction, an eccentric mass, heating of the
-//! armature, a magnetic saturation of tanh shape, a lagging or quantised speed
-//! sensor, a driver gain below one), with white or coloured noise.
+//! not have (sharp or asymmetric friction, an eccentric mass, a torque at a
+//! fixed frequency, heating of the armature, cores that saturate in three
+//! shapes, a lagging, quantised or drifting speed sensor, a driver gain below
+//! one), with white or coloured noise.
 //!
 //! `cargo test --release --test outside_motor -- --ignored --nocapture`
-//! prints the table the docs quote (docs/discovery.md); four cases also run in CI.
+//! prints the table the docs quote (docs/measurement-loop.md); the cases marked CI there
+//! are also asserted in every run.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // in tests, a panic is a failure
 
@@ -50,6 +52,8 @@ struct Hidden {
     /// The back-EMF follows the same `K (1 + a sin nθ)` (what energy conservation asks of
     /// a winding's torque ripple).
     emf_ripple: bool,
+    /// The speed sensor's zero drifts at this rate ((rad/s)/s) from the start.
+    sensor_drift: f64,
 }
 
 /// The Hunt–Crossley contact of the backlash case: stiffness (N m/rad^1.5)
@@ -177,6 +181,7 @@ fn record(h: &Hidden, white: f64, coloured: f64, seed: u64) -> Recording {
         } else {
             w
         };
+        let w = w + h.sensor_drift * t;
         ts.push(t);
         vs.push(drive(t));
         ti.push(i);
@@ -269,6 +274,41 @@ fn cases() -> Vec<(&'static str, Hidden)> {
                     let s = (w / 0.05).tanh();
                     if s > 0.0 { 0.012 * s } else { 0.006 * s }
                 }),
+                ..Hidden::default()
+            },
+        ),
+        (
+            "periodic load 7.5 Hz",
+            Hidden {
+                // A neighbouring machine's vibration: a torque at a fixed frequency, locked
+                // to time, not to the angle (none of the drive's 0.7, 3.3 and 11 Hz).
+                torque: Some(|_, _, t| 0.004 * (std::f64::consts::TAU * 7.5 * t + 0.2).sin()),
+                ..Hidden::default()
+            },
+        ),
+        (
+            "exponential Stribeck",
+            Hidden {
+                // A Stribeck dip that decays exponentially, not as a Gaussian.
+                torque: Some(|w, _, _| {
+                    (0.006 + 0.015 * (-w.abs() / 5.0).exp()) * (w / 0.05).tanh()
+                }),
+                ..Hidden::default()
+            },
+        ),
+        (
+            "viscous friction growing over the run",
+            Hidden {
+                // A bearing whose grease warms: its viscous friction rises from nothing to
+                // 3e-5 N m s/rad (three times the model's) at a steady rate over the 6 s.
+                torque: Some(|w, _, t| 5e-6 * t * w),
+                ..Hidden::default()
+            },
+        ),
+        (
+            "speed sensor drifting 0.3 rad/s per s",
+            Hidden {
+                sensor_drift: 0.3,
                 ..Hidden::default()
             },
         ),
@@ -549,6 +589,54 @@ fn a_core_that_saturates_towards_a_flux_limit_is_named_with_its_limit() {
     assert_eq!(ids, ["flux-limit@L"], "{text}");
     within(value(&params, "psi_lim", &text), limit, 0.1, &text);
     at_floor(&ex, &text);
+}
+
+#[test]
+fn a_torque_at_a_fixed_frequency_is_a_periodic_law_with_its_frequency_and_phase() {
+    // 0.004 sin(2π · 7.5 t + 0.2) N m: locked to time, not to the angle, at none of the
+    // drive's frequencies.
+    let ex = explained(&record(&case("periodic load 7.5 Hz"), 2e-3, 0.0, 23));
+    let (ids, params, text) = chosen(&ex);
+    assert_eq!(ids.len(), 1, "{text}");
+    assert!(ids[0].starts_with("law@1m:"), "{text}");
+    within(value(&params, "f_sint", &text), 7.5, 0.001, &text);
+    let (s, c) = (
+        value(&params, "c_sint", &text),
+        value(&params, "c_cost", &text),
+    );
+    // 0.004 sin(ωt + 0.2) = 0.004 cos 0.2 sin ωt + 0.004 sin 0.2 cos ωt.
+    within(s.hypot(c), 0.004, 0.05, &text);
+    let phase = c.atan2(s);
+    assert!((phase - 0.2).abs() < 0.05, "phase {phase}:\n{text}");
+    at_floor(&ex, &text);
+}
+
+#[test]
+fn a_viscous_friction_that_grows_over_the_run_is_the_time_times_the_speed() {
+    // 5e-6 t ω: from nothing to three times the model's viscous friction over 6 s.
+    let ex = explained(&record(
+        &case("viscous friction growing over the run"),
+        2e-3,
+        0.0,
+        25,
+    ));
+    let (ids, params, text) = chosen(&ex);
+    assert_eq!(ids, ["law@1m:c_prod * t * '1m'.f"], "{text}");
+    within(value(&params, "c_prod", &text), 5e-6, 0.05, &text);
+    at_floor(&ex, &text);
+}
+
+#[test]
+fn a_speed_sensor_whose_zero_drifts_under_coloured_noise_is_named_a_drift() {
+    let ex = explained(&record(
+        &case("speed sensor drifting 0.3 rad/s per s"),
+        1e-3,
+        2e-3,
+        24,
+    ));
+    let (ids, params, text) = chosen(&ex);
+    assert_eq!(ids, ["drift@omega"], "{text}");
+    within(value(&params, "drift", &text), 0.3, 0.05, &text);
 }
 
 #[test]

@@ -11,8 +11,8 @@ use super::{
     ActuatorDelay, ActuatorGain, ActuatorLag, ActuatorLimit, ActuatorOffset, Backlash, Brush,
     Calibration, Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault, Faulted,
     FluxLimit, Heating, Inertia, Inflow, Junction, LawEffect, Leak, Load, ModulusRipple, Node,
-    Orifice, Overflow, PowerLoss, Saturation, SensorClip, SensorDelay, SensorLag, SensorOffset,
-    SensorScale, Stiffness, Store, Viscous,
+    Orifice, Overflow, PowerLoss, Saturation, SensorClip, SensorDelay, SensorDrift, SensorLag,
+    SensorOffset, SensorScale, Stiffness, Store, Viscous,
 };
 use crate::error::{BondError, Result};
 use crate::graph::{BondGraph, ElementId};
@@ -81,6 +81,8 @@ pub enum BondEffect {
     Lag(SensorLag),
     /// `offset@<output>`: a constant offset in an output's sensor.
     Offset(SensorOffset),
+    /// `drift@<output>`: a sensor whose zero drifts at a steady rate.
+    Drift(SensorDrift),
     /// `clip@<output>`: a sensor that reads nothing beyond its range.
     Clip(SensorClip),
     /// `scale@<output>`: a gain in an output's sensor.
@@ -167,6 +169,12 @@ impl From<SensorClip> for BondEffect {
 impl From<SensorOffset> for BondEffect {
     fn from(k: SensorOffset) -> BondEffect {
         BondEffect::Offset(k)
+    }
+}
+
+impl From<SensorDrift> for BondEffect {
+    fn from(k: SensorDrift) -> BondEffect {
+        BondEffect::Drift(k)
     }
 }
 
@@ -364,6 +372,16 @@ impl BondEffect {
                 })?;
                 Some(BondEffect::Offset(o))
             }
+            Tag::Drift => {
+                let o = SensorDrift::named(g, target).ok_or_else(|| {
+                    bad(
+                        c,
+                        "",
+                        format!("the model has no output '{target}' a drift can move"),
+                    )
+                })?;
+                Some(BondEffect::Drift(o))
+            }
             Tag::Clip => {
                 let o = SensorClip::named(g, target).ok_or_else(|| {
                     bad(
@@ -458,6 +476,7 @@ impl BondEffect {
             BondEffect::ActuatorDelay(k) => k,
             BondEffect::Lag(k) => k,
             BondEffect::Offset(k) => k,
+            BondEffect::Drift(k) => k,
             BondEffect::Clip(k) => k,
             BondEffect::Scale(k) => k,
             BondEffect::Delay(k) => k,
@@ -501,6 +520,7 @@ impl BondEffect {
             | BondEffect::ActuatorDelay(_)
             | BondEffect::Lag(_)
             | BondEffect::Offset(_)
+            | BondEffect::Drift(_)
             | BondEffect::Clip(_)
             | BondEffect::Scale(_)
             | BondEffect::Delay(_)
@@ -571,6 +591,7 @@ impl BondEffect {
             Tag::ActuatorDelay => ActuatorDelay::vanishing_values(c),
             Tag::Lag => SensorLag::vanishing_values(c),
             Tag::Offset => SensorOffset::vanishing_values(c),
+            Tag::Drift => SensorDrift::vanishing_values(c),
             Tag::Clip => SensorClip::vanishing_values(c),
             Tag::Scale => SensorScale::vanishing_values(c),
             Tag::Delay => SensorDelay::vanishing_values(c),

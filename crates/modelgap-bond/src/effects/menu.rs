@@ -10,7 +10,8 @@ use super::{
     ActuatorDelay, ActuatorGain, ActuatorLag, ActuatorLimit, ActuatorOffset, Backlash, Brush,
     Cogging, Coulomb, Coupling, DeadZone, Declared, Deviation, Factor, Fault, FluxLimit, Heating,
     Inertia, Inflow, Leak, Load, ModulusRipple, Orifice, Overflow, PowerLoss, Saturation,
-    SensorClip, SensorDelay, SensorLag, SensorOffset, SensorScale, Stiffness, Store, Viscous,
+    SensorClip, SensorDelay, SensorDrift, SensorLag, SensorOffset, SensorScale, Stiffness, Store,
+    Viscous,
 };
 use crate::element::Law;
 use crate::expr::Expr;
@@ -166,6 +167,7 @@ pub fn offered(g: &BondGraph) -> Vec<BondEffect> {
     out.extend(of::<ActuatorDelay>(g));
     out.extend(of::<SensorLag>(g));
     out.extend(of::<SensorOffset>(g));
+    out.extend(of::<SensorDrift>(g));
     out.extend(of::<SensorClip>(g));
     out.extend(of::<SensorScale>(g));
     out.extend(of::<SensorDelay>(g));

@@ -74,6 +74,7 @@
 //!   lag) and [`actuator-delay`](ActuatorDelay) (a delay behind);
 //! - on every output: [`lag`](SensorLag) (a first-order lag in its sensor) and
 //!   [`offset`](SensorOffset) (a constant added to its reading),
+//!   [`drift`](SensorDrift) (its zero moves at a steady rate),
 //!   [`clip`](SensorClip) (it reads nothing beyond `[lower, upper]`) and
 //!   [`scale`](SensorScale) (its reading `k` times the value) and
 //!   [`delay`](SensorDelay) (it reports late, any fraction of a sample);
@@ -105,6 +106,7 @@ mod def;
 mod delay;
 mod deviation;
 mod domain;
+mod drift;
 mod edit;
 mod factor;
 mod fault;
@@ -157,6 +159,7 @@ pub use def::{EffectDef, QualTarget};
 pub use delay::SensorDelay;
 pub use deviation::Deviation;
 pub use domain::Domain;
+pub use drift::SensorDrift;
 pub(crate) use edit::attach;
 pub use factor::Factor;
 pub use fault::{Fault, Faulted};

@@ -36,6 +36,7 @@ pub(super) enum Tag {
     ActuatorOffset,
     Lag,
     Offset,
+    Drift,
     Clip,
     Scale,
     Delay,
@@ -45,7 +46,7 @@ pub(super) enum Tag {
 }
 
 /// Every tag with its id prefix, in menu order.
-const PREFIXES: [(Tag, &str); 35] = [
+const PREFIXES: [(Tag, &str); 36] = [
     (Tag::Deviation, "deviation:"),
     (Tag::Fault, "fault:"),
     (Tag::Viscous, "viscous@"),
@@ -75,6 +76,7 @@ const PREFIXES: [(Tag, &str); 35] = [
     (Tag::ActuatorOffset, "actuator-offset@"),
     (Tag::Lag, "lag@"),
     (Tag::Offset, "offset@"),
+    (Tag::Drift, "drift@"),
     (Tag::Clip, "clip@"),
     (Tag::Scale, "scale@"),
     (Tag::Delay, "delay@"),
@@ -139,7 +141,7 @@ mod tests {
     fn the_expected_prefixes_read_as_a_list() {
         assert_eq!(
             Tag::expected(),
-            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, backlash@, cogging@, brush@, saturation@, flux-limit@, ripple@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, power@, store@, deadzone@, gain@, limit@, actuator-lag@, actuator-delay@, actuator-offset@, lag@, offset@, clip@, scale@, delay@, declared: or law@"
+            "deviation:, fault:, viscous@, coulomb@, load@, inertia@, coupling@, backlash@, cogging@, brush@, saturation@, flux-limit@, ripple@, heating@, stiffness@, leak@, inflow@, overflow@, orifice@, power@, store@, deadzone@, gain@, limit@, actuator-lag@, actuator-delay@, actuator-offset@, lag@, offset@, drift@, clip@, scale@, delay@, declared: or law@"
         );
     }
 }
