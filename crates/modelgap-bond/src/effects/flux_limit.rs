@@ -22,11 +22,10 @@ use modelgap_core::{Candidate, EffectKind, EffectParam};
 
 use super::Saturation;
 use super::def::EffectDef;
-use super::edit::{bad, ident, law, new_param};
+use super::edit::{ident, new_param};
 use super::menu::linear_element_words;
 use super::scales::Scales;
 use super::tag::Tag;
-use crate::element::Law;
 use crate::error::Result;
 use crate::graph::{BondGraph, ElementId};
 use crate::simulate::ParamChange;
@@ -91,14 +90,10 @@ impl EffectDef for FluxLimit {
 
     /// Changes the law of the I to `f = p / L · max(1 − |p/ψ_lim|^n, 10⁻⁶)^(−m)`.
     fn edit(&self, g: &mut BondGraph, c: &Candidate, values: &[f64]) -> Result<Vec<ParamChange>> {
-        let target = g.element(self.element).name.clone();
-        let Law::Linear(old) = g.element(self.element).law.clone() else {
-            return Err(bad(
-                c,
-                "",
-                format!("the I element '{target}' has no linear law to saturate"),
-            ));
+        let core = Saturation {
+            element: self.element,
         };
+        let (target, old) = core.linear_law(g, c)?;
         let stem = ident(&target);
         let note = |what: &str| format!("flux limit: {what} (added effect {})", c.id);
         let psi = new_param(
@@ -122,14 +117,11 @@ impl EffectDef for FluxLimit {
             "1",
             &note("the exponent of the pole"),
         )?;
-        let flow = law(
+        core.set_current(
+            g,
             c,
             &format!("p / ({old}) * max(1 - abs(p / {psi})^{n}, {FLOOR:e})^(-{m})"),
         )?;
-        g.element_mut(self.element).law = Law::Nonlinear {
-            effort: None,
-            flow: Some(flow),
-        };
         Ok(Vec::new())
     }
 

@@ -15,6 +15,7 @@ use super::scales::Scales;
 use super::tag::Tag;
 use crate::element::{ElementKind, Law};
 use crate::error::Result;
+use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
 use crate::simulate::ParamChange;
 
@@ -50,6 +51,29 @@ impl Saturation {
             return None;
         }
         law_value(g, x).filter(|v| *v > 0.0)
+    }
+
+    /// The I's name and its linear law (`L`), or a typed error naming it.
+    pub(super) fn linear_law(self, g: &BondGraph, c: &Candidate) -> Result<(String, Expr)> {
+        let target = g.element(self.element).name.clone();
+        let Law::Linear(old) = g.element(self.element).law.clone() else {
+            return Err(bad(
+                c,
+                "",
+                format!("the I element '{target}' has no linear law to saturate"),
+            ));
+        };
+        Ok((target, old))
+    }
+
+    /// Makes the I's law its current as `formula` of its flux `p`.
+    pub(super) fn set_current(self, g: &mut BondGraph, c: &Candidate, formula: &str) -> Result<()> {
+        let flow = law(c, formula)?;
+        g.element_mut(self.element).law = Law::Nonlinear {
+            effort: None,
+            flow: Some(flow),
+        };
+        Ok(())
     }
 
     /// The peak flux of the model's run (a start-up's, or the recording's),
@@ -98,14 +122,7 @@ impl EffectDef for Saturation {
 
     /// Changes the law of the I to `f = p / L · (1 + a p²)^m`.
     fn edit(&self, g: &mut BondGraph, c: &Candidate, values: &[f64]) -> Result<Vec<ParamChange>> {
-        let target = g.element(self.element).name.clone();
-        let Law::Linear(old) = g.element(self.element).law.clone() else {
-            return Err(bad(
-                c,
-                "",
-                format!("the I element '{target}' has no linear law to saturate"),
-            ));
-        };
+        let (target, old) = self.linear_law(g, c)?;
         let a_name = new_param(
             g,
             &format!("a_sat_{}", ident(&target)),
@@ -126,11 +143,11 @@ impl EffectDef for Saturation {
                 c.id
             ),
         )?;
-        let flow = law(c, &format!("p / ({old}) * (1 + {a_name} * p^2)^{m_name}"))?;
-        g.element_mut(self.element).law = Law::Nonlinear {
-            effort: None,
-            flow: Some(flow),
-        };
+        self.set_current(
+            g,
+            c,
+            &format!("p / ({old}) * (1 + {a_name} * p^2)^{m_name}"),
+        )?;
         Ok(Vec::new())
     }
 
