@@ -235,14 +235,31 @@ impl Law {
         parts.join(" + ")
     }
 
+    /// The shape each term's label reads at its `§`: its own, or for a term
+    /// that shares the shape of the term before it (a periodic law's cosine
+    /// reads its sine's frequency), that one's.
+    fn shapes(&self) -> Vec<Option<&Shape>> {
+        let mut last: Option<&Shape> = None;
+        (self.terms.iter())
+            .map(|t| {
+                if t.shape.is_some() {
+                    last = t.shape.as_ref();
+                }
+                t.shape.as_ref().or(last.filter(|_| t.label.contains('§')))
+            })
+            .collect()
+    }
+
     /// The law with its numbers, in words:
     /// `0.021 N m · tanh(speed / 0.01 rad/s) + 0.002 N m`.
     pub fn describe(&self) -> String {
         // Each term by the size of its coefficient; a negative one after the first joins
         // with a minus sign (`+ -9.7e-4` read as a typo).
+        let shapes = self.shapes();
         let parts: Vec<(bool, String)> = (self.terms.iter())
+            .zip(&shapes)
             .enumerate()
-            .map(|(i, t)| {
+            .map(|(i, (t, shape))| {
                 let negative = i > 0 && t.coefficient < 0.0;
                 let c = if negative {
                     -t.coefficient
@@ -254,7 +271,7 @@ impl Law {
                 } else {
                     format!(" {}", t.unit)
                 };
-                let label = match &t.shape {
+                let label = match shape {
                     Some(sh) => t
                         .label
                         .replace('§', &format!("{} {}", sig(sh.value), sh.unit)),
@@ -282,8 +299,9 @@ impl Law {
     /// `c_sign · tanh(speed of the shaft (1m) / eps_sign) + c_const`.
     pub fn symbolic(&self) -> String {
         let parts: Vec<String> = (self.terms.iter())
-            .map(|t| {
-                let label = match &t.shape {
+            .zip(self.shapes())
+            .map(|(t, shape)| {
+                let label = match shape {
                     Some(sh) => t.label.replace('§', &sh.name),
                     None => t.label.clone(),
                 };
@@ -424,8 +442,6 @@ fn ripples(y: &[f64], a: &ActingSignal, x: &[f64], eu: &str) -> Vec<Block> {
             let k = k_lo + dk * i as f64;
             let lambda = tau / k;
             let (lam_lo, lam_hi) = (tau / (k + 3.0 * dk), tau / (k - 3.0 * dk).max(0.5 * k));
-            // The cosine reads the sine's wavelength by the name the law will give it.
-            let cos_label = format!("cos(2π · {label} / {} {})", sig(lambda), a.unit);
             Block {
                 family: Family::Ripple,
                 member: n.clone(),
@@ -445,10 +461,11 @@ fn ripples(y: &[f64], a: &ActingSignal, x: &[f64], eu: &str) -> Vec<Block> {
                         lam_lo,
                         lam_hi,
                     ),
+                    // The cosine reads the sine's wavelength (in its label, `§` too).
                     term(
                         "c_cosx",
                         Family::Ripple,
-                        cos_label,
+                        format!("cos(2π · {label} / §)"),
                         format!("cos({} * {n} / lam_sinx)", num(tau)),
                         eu.to_string(),
                     ),
@@ -589,8 +606,6 @@ fn periodics(y: &[f64], t: &[f64], inputs: &[Vec<f64>], eu: &str) -> Vec<Block> 
             let w = w_lo + dw * i as f64;
             let f = w / tau;
             let (f_lo, f_hi) = ((w - 3.0 * dw) / tau, (w + 3.0 * dw) / tau);
-            // The cosine reads the sine's frequency by the name the law will give it.
-            let cos_label = format!("cos(2π · {} Hz · t)", sig(f));
             Block {
                 family: Family::Periodic,
                 member: "t".to_string(),
@@ -610,10 +625,11 @@ fn periodics(y: &[f64], t: &[f64], inputs: &[Vec<f64>], eu: &str) -> Vec<Block> 
                         f_lo.max(0.5 * f),
                         f_hi,
                     ),
+                    // The cosine reads the sine's frequency (in its label, `§` too).
                     term(
                         "c_cost",
                         Family::Periodic,
-                        cos_label,
+                        "cos(2π · § · t)".to_string(),
                         format!("cos({} * f_sint * t)", num(tau)),
                         eu.to_string(),
                     ),
@@ -2074,6 +2090,19 @@ mod tests {
             .sum::<f64>()
             .sqrt();
         assert!((amplitude / 0.02 - 1.0).abs() < 0.1, "{}", law.describe());
+        // The cosine reads the sine's frequency, by name and by value.
+        assert!(
+            law.symbolic().contains("c_cost · cos(2π · f_sint · t)"),
+            "{}",
+            law.symbolic()
+        );
+        assert!(!law.describe().contains('§'), "{}", law.describe());
+        assert!(
+            law.describe()
+                .contains(&format!("cos(2π · {} Hz · t)", sig(f))),
+            "{}",
+            law.describe()
+        );
         // The same vibration at the drive's 4 Hz: a law of the time there cannot be told
         // from what the drive does through one of the speed, and is not offered.
         let on_the_drive = screen(&place(4.0, &mut gauss));
