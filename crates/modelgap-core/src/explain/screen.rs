@@ -599,7 +599,6 @@ fn periodics(y: &[f64], t: &[f64], inputs: &[Vec<f64>], eu: &str) -> Vec<Block> 
         }
     }
     let offered = power.iter().filter(|p| **p > 0.0).count();
-    let time = t.to_vec();
     highest_peaks(&power, PERIODIC_PEAKS)
         .into_iter()
         .map(|i| {
@@ -635,8 +634,8 @@ fn periodics(y: &[f64], t: &[f64], inputs: &[Vec<f64>], eu: &str) -> Vec<Block> 
                     ),
                 ],
                 columns: vec![
-                    time.iter().map(|x| (w * x).sin()).collect(),
-                    time.iter().map(|x| (w * x).cos()).collect(),
+                    t.iter().map(|x| (w * x).sin()).collect(),
+                    t.iter().map(|x| (w * x).cos()).collect(),
                 ],
             }
         })
