@@ -84,5 +84,5 @@ pub use model::{ClothModel, PredictSettings};
 pub use particles::{ParticleId, ParticleSet};
 pub use rail::Rail;
 pub use scenes::Scene;
-pub use solver::{Fallback, Method, SolverParams, StepReport};
+pub use solver::{Fallback, Integrator, Method, SolverParams, StepReport};
 pub use world::{ClothId, ClothWorld, STALL_MARGIN, Stagnation};

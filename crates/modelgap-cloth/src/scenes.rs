@@ -17,6 +17,8 @@
 //! dt = 0.01                 # s
 //! stretch_tolerance = 1e-4  # relative
 //! gravity = [0.0, -9.81, 0.0]   # m/s^2, magnitude at most 1000 (solver::MAX_GRAVITY)
+//! integrator = "impulse"    # optional: "impulse" (the paper's step, first order) or
+//!                           # "bdf2" (second order; solver::Integrator)
 //!
 //! [cloth]
 //! nx = 30
@@ -124,7 +126,7 @@ use crate::material::{MaterialFile, write_materials};
 use crate::mesh::GridCloth;
 use crate::rail::file::{AttachFile, RailFile, Reader};
 use crate::rail::{Rail, RailPins};
-use crate::solver::{MAX_GRAVITY, SolverParams};
+use crate::solver::{Integrator, MAX_GRAVITY, SolverParams};
 use crate::world::{ClothId, ClothWorld};
 
 const CORNER: &str = include_str!("../scenes/corner.toml");
@@ -177,6 +179,7 @@ struct SceneFile {
     dt: f64,
     stretch_tolerance: Option<f64>,
     gravity: Option<[f64; 3]>,
+    integrator: Option<String>,
     cloth: ClothFile,
     #[serde(default)]
     colliders: Vec<ColliderFile>,
@@ -454,6 +457,19 @@ fn triple(v: [f64; 3]) -> String {
 }
 
 /// The numbers and sizes of a scene file, each checked where it enters.
+/// The integrator a scene file names (`integrator`).
+fn integrator(name: &str) -> std::result::Result<Integrator, FieldError> {
+    match name {
+        "impulse" => Ok(Integrator::Impulse),
+        "bdf2" => Ok(Integrator::Bdf2),
+        _ => Err(FieldError::new(
+            "integrator",
+            "\"impulse\" (the paper's step) or \"bdf2\" (second order)",
+            format!("{name:?}"),
+        )),
+    }
+}
+
 fn check_fields(file: &SceneFile) -> std::result::Result<(), FieldError> {
     let positive = |field: &str, v: f64| {
         if v > 0.0 && v.is_finite() {
@@ -466,6 +482,9 @@ fn check_fields(file: &SceneFile) -> std::result::Result<(), FieldError> {
     positive("duration", file.duration)?;
     if let Some(tol) = file.stretch_tolerance {
         positive("stretch_tolerance", tol)?;
+    }
+    if let Some(name) = &file.integrator {
+        integrator(name)?;
     }
     if let Some(g) = file.gravity {
         let magnitude = crate::solver::magnitude(&Vector3::from(g));
@@ -555,6 +574,9 @@ impl Scene {
         }
         if let Some(g) = file.gravity {
             params.gravity = Vector3::from(g);
+        }
+        if let Some(name) = &file.integrator {
+            params.integrator = integrator(name).map_err(in_scene)?;
         }
         let c = &file.cloth;
         let [ox, oy, oz] = c.origin;
@@ -761,6 +783,9 @@ impl Scene {
             num(self.params.stretch_tolerance)
         );
         let _ = writeln!(out, "gravity = {}  # m/s^2", vec3(&self.params.gravity));
+        if self.params.integrator == Integrator::Bdf2 {
+            let _ = writeln!(out, "integrator = \"bdf2\"  # second order");
+        }
         let _ = writeln!(out, "\n[cloth]");
         let _ = writeln!(out, "nx = {}", c.nx);
         let _ = writeln!(out, "nz = {}", c.nz);
@@ -1156,5 +1181,25 @@ mod tests {
         assert!(err.to_string().contains("dt must be positive"), "{err}");
         let err = Scene::from_toml("name = 'x'\n", "x").unwrap_err();
         assert!(matches!(err, ClothError::Scene { .. }));
+    }
+
+    #[test]
+    fn the_integrator_is_read_written_back_and_a_wrong_one_named() {
+        let base = "name = 'x'\nduration = 1.0\ndt = 0.01\n";
+        let cloth = "[cloth]\nnx = 2\nnz = 2\nsize = 1.0\n";
+        let scene = Scene::from_toml(&format!("{base}{cloth}"), "x").unwrap();
+        assert_eq!(scene.params.integrator, Integrator::Impulse);
+        assert!(!scene.to_toml().unwrap().contains("integrator"));
+        let text = format!("{base}integrator = \"bdf2\"\n{cloth}");
+        let scene = Scene::from_toml(&text, "x").unwrap();
+        assert_eq!(scene.params.integrator, Integrator::Bdf2);
+        let back = Scene::from_toml(&scene.to_toml().unwrap(), "x").unwrap();
+        assert_eq!(back.params.integrator, Integrator::Bdf2);
+        let text = format!("{base}integrator = \"rk4\"\n{cloth}");
+        let err = Scene::from_toml(&text, "x").unwrap_err().to_string();
+        assert!(
+            err.contains("integrator") && err.contains("\"rk4\"") && err.contains("bdf2"),
+            "{err}"
+        );
     }
 }

@@ -67,6 +67,36 @@ pub enum Method {
     Strips,
 }
 
+/// How a step advances positions and velocities in time around the constraint solve.
+///
+/// Both solve the same problem each step — a previewed position `x̂` pulled
+/// onto the constraints by impulses along their end-of-step directions,
+/// `x = x̂ − M⁻¹ Jᵀ μ`, `C(x) = α μ / (β h)²` — and differ in the preview,
+/// in the weight `β` of the step and in the velocity they leave.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Integrator {
+    /// The paper's step: preview `c + h v + h² a / 2` under constant force,
+    /// impulses at the end of the step, velocity `(x − c)/h + h a / 2`
+    /// (`β = 1`). First order where the constraints act: a swinging cloth
+    /// loses energy to the step, and its trajectory's error falls only in
+    /// proportion to the step (on the curtain swaying 3 cm at 0.4 Hz, 1.6 mm
+    /// RMS at h = 0.01 s against a run converged in the step). The default.
+    #[default]
+    Impulse,
+    /// The second-order backward differentiation formula (BDF2) on positions
+    /// and velocities, with the forces besides the constraints taken at the
+    /// start of the step: preview `(4x_n − x_{n−1})/3 + (2h/3)(4v_n −
+    /// v_{n−1})/3 + (2h/3)² a`, impulses at the end of the step (`β = 2/3`),
+    /// velocity `(3x − 4x_n + x_{n−1})/(2h)`. Second order: the error falls
+    /// with the step squared, and it damps only what the step cannot resolve.
+    /// It needs the step before: the first step, a step of another size,
+    /// and a step after the state was edited or the topology changed are
+    /// [`Integrator::Impulse`] steps, and so is every step of a world with
+    /// colliders (contact and friction are written for that step).
+    Bdf2,
+}
+
 /// The largest gravity a world steps with (m/s², magnitude): 1000 m/s², about 100 g.
 ///
 /// Measured on the 30 × 30 reference scenes (h = 0.01 s, Newton, 10 steps): at 1000 m/s²
@@ -112,6 +142,9 @@ pub struct SolverParams {
     /// Allowed penetration into colliders at the end of a converged step (m);
     /// default 1e-4.
     pub contact_tolerance: f64,
+    /// The time integration around the constraint solve; default
+    /// [`Integrator::Impulse`], the paper's.
+    pub integrator: Integrator,
 }
 
 impl Default for SolverParams {
@@ -126,6 +159,7 @@ impl Default for SolverParams {
             warm_start: true,
             refactor_ratio: 0.3,
             contact_tolerance: 1e-4,
+            integrator: Integrator::Impulse,
         }
     }
 }

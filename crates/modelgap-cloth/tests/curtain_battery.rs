@@ -10,6 +10,16 @@
 //! The laws are the menu's own forms here (a cloth's air, mass and material laws have few
 //! shapes a user would declare otherwise); drag hides its normal and tangential parts
 //! together.
+//!
+//! **The truth is simulated at the model's own step** (a twin of the model's numerics), so
+//! the battery measures discovery, not the model's step error. Against a truth converged in
+//! the step this scene is out of reach: the paper's step at h = 0.01 s is 13–36 mm RMS from
+//! it, and the scene branches (a micrometre's nudge of the start moves it by 15 mm RMS after
+//! 1.5 s); explain now warns of it (the model's own error, `explain/own_error.rs`).
+//! Environment knobs for runs against such truths: `TRUTH_DIVISOR=k` (the truth at 1/k of
+//! the step), `BDF2=1` (model and truth with `Integrator::Bdf2`), `AX`, `AZ`, `FZ` (the
+//! rail's sway along and across the sheet, m, and the frequency across, Hz);
+//! `step_error_probe` prints the model's error against a truth at a quarter of the step.
 
 #![allow(clippy::unwrap_used)] // in test helpers, a panic is a test failure
 
@@ -22,12 +32,18 @@ use modelgap_core::{ExplainOptions, Explanation, Verdict, explain};
 fn curtain() -> Scene {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/data/curtain.toml");
     let mut scene = Scene::from_path(&path).unwrap();
+    let ax = std::env::var("AX").unwrap_or("0.2".into());
+    let az = std::env::var("AZ").unwrap_or("0.05".into());
+    let fz = std::env::var("FZ").unwrap_or("1.5".into());
     scene.rails[0].translation = modelgap_cloth::rail::Motion::expressions([
-        "0.2 * sin(2 * pi * 0.4 * t)",
+        format!("{ax} * sin(2 * pi * 0.4 * t)").as_str(),
         "0",
-        "0.05 * sin(2 * pi * 1.5 * t)",
+        format!("{az} * sin(2 * pi * {fz} * t)").as_str(),
     ])
     .unwrap();
+    if std::env::var("BDF2").is_ok() {
+        scene.params.integrator = modelgap_cloth::Integrator::Bdf2;
+    }
     scene
 }
 
@@ -61,7 +77,9 @@ fn explain_case(name: &str, hidden: &[(&str, &[f64])]) -> Explanation {
             .collect(),
         markers: markers(),
     };
-    let rec = record(&case, &RecordingOptions::default()).unwrap();
+    let mut opts = RecordingOptions::default();
+    opts.truth.step_divisor = std::env::var("TRUTH_DIVISOR").map_or(1, |d| d.parse().unwrap());
+    let rec = record(&case, &opts).unwrap();
     let ex = explain(&ClothModel::new(scene), &rec, &ExplainOptions::default()).unwrap();
     let wall: f64 = ex.timings.iter().map(|t| t.wall_s).sum();
     let cpu: f64 = ex.timings.iter().filter_map(|t| t.cpu_s).sum();
@@ -86,6 +104,9 @@ fn explain_case(name: &str, hidden: &[(&str, &[f64])]) -> Explanation {
             if r.screened { " screened" } else { "" },
             r.params.iter().map(|p| p.value).collect::<Vec<_>>()
         );
+    }
+    for r in &ex.reasons {
+        println!("  reason: {r}");
     }
     for t in &ex.timings {
         println!(
@@ -247,5 +268,66 @@ fn drag_parts() {
         vec![("damping", 0.5)],
     ] {
         println!("{effects:?}: {:.3} mm", rms(&effects));
+    }
+}
+
+/// The nominal model's marker error (RMS and largest, per coordinate, and per 0.5 s) against
+/// the control's truth at a quarter of the step and a stretch tolerance of 1e-6, at the
+/// scene's step and half of it, with and without a micrometre's nudge of the start, at the
+/// scene's tolerance and at 1e-6. A probe (nothing to assert): run with
+/// `--release -- --ignored --nocapture step_error_probe`.
+#[test]
+#[ignore = "a probe: prints the model's step and tolerance error"]
+fn step_error_probe() {
+    use modelgap_cloth::PredictSettings;
+    use modelgap_core::Model as _;
+    let scene = curtain();
+    let case = HiddenCase {
+        name: "control".into(),
+        scene: scene.clone(),
+        hidden: vec![],
+        markers: markers(),
+    };
+    let mut opts = RecordingOptions {
+        noise: 0.0,
+        ..RecordingOptions::default()
+    };
+    opts.truth.step_divisor = 4;
+    let rec = record(&case, &opts).unwrap();
+    for (d, pert) in [(1usize, 0.0), (1, 1e-6), (2, 0.0), (2, 1e-6)] {
+        for tol in [1e-4, 1e-6] {
+            let model = ClothModel::new(scene.clone()).with_settings(PredictSettings {
+                step_divisor: d,
+                perturbation: pert,
+                stretch_tolerance: Some(tol),
+                ..PredictSettings::default()
+            });
+            let t0 = std::time::Instant::now();
+            let p = model.predict(&rec).unwrap();
+            let mut win = [0.0f64; 6];
+            for (name, values) in p.names.iter().zip(&p.values) {
+                for (k, (a, b)) in values.iter().zip(rec.values(name).unwrap()).enumerate() {
+                    win[(k / 50).min(5)] += (a - b) * (a - b) / 50.0 / p.names.len() as f64;
+                }
+            }
+            println!(
+                "windows (mm): {:?}",
+                win.map(|w| (1e4 * w.sqrt()).round() / 10.0)
+            );
+            let (mut sum, mut n, mut worst) = (0.0, 0usize, 0.0f64);
+            for (name, values) in p.names.iter().zip(&p.values) {
+                for (a, b) in values.iter().zip(rec.values(name).unwrap()) {
+                    sum += (a - b) * (a - b);
+                    n += 1;
+                    worst = worst.max((a - b).abs());
+                }
+            }
+            println!(
+                "divisor {d} pert {pert:e} tol {tol:e}: rms {:.3} mm, max {:.3} mm, {:.2} s",
+                1e3 * (sum / n as f64).sqrt(),
+                1e3 * worst,
+                t0.elapsed().as_secs_f64()
+            );
+        }
     }
 }

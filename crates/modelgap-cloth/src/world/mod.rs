@@ -48,7 +48,13 @@ struct SolverWorkspace {
     free: Vec<Vector3<f64>>,
     mu: Vec<f64>,
     contacts: Vec<ContactState>,
+    /// The weighted step `β h` of the last solve (s): impulses scale with its
+    /// square, so the warm start rescales by the ratio.
     last_dt: Option<f64>,
+    /// The state a step started from, kept for the next step's
+    /// [`Integrator::Bdf2`](crate::solver::Integrator::Bdf2): dropped when the
+    /// state is edited or the topology changes.
+    history: Option<History>,
     newton: Option<NewtonSolver>,
     /// The coloured sweep (colouring and scratch), built on the first step
     /// with [`SolverParams::coloured_sweep`], dropped on a topology change.
@@ -58,6 +64,14 @@ struct SolverWorkspace {
     strips: Option<StripSweep>,
     /// The smallest sweep error so far after each sweep (stagnation).
     best_errors: Vec<f64>,
+}
+
+/// The positions and velocities a step of `dt` started from (BDF2's `x_{n−1}`, `v_{n−1}`).
+#[derive(Debug, Default)]
+struct History {
+    positions: Vec<Vector3<f64>>,
+    velocities: Vec<Vector3<f64>>,
+    dt: f64,
 }
 
 /// A world's record of a stretch tolerance it could not reach: the first step
@@ -357,6 +371,7 @@ impl ClothWorld {
     /// disturbance, a scrambled state). Masses may change but not between
     /// static and dynamic (that is a topology change: add the cloth again).
     pub fn particles_mut(&mut self) -> &mut ParticleSet {
+        self.workspace.history = None;
         &mut self.particles
     }
 
@@ -492,6 +507,7 @@ impl ClothWorld {
         self.workspace.mu.clear();
         self.workspace.mu.resize(self.constraints.len(), 0.0);
         self.workspace.last_dt = None;
+        self.workspace.history = None;
     }
 
     /// Advances the world by `steps` steps of `dt` seconds; the report merges

@@ -25,6 +25,7 @@ mod confirm;
 pub mod estimate;
 mod heldout;
 mod memo;
+mod own_error;
 mod pairs;
 pub mod screen;
 mod symbolic;
@@ -1396,6 +1397,14 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
     {
         r.params = w.params;
     }
+    // The model's own error: how far its numerics alone move its prediction.
+    match own_error::own_error(model, rec, &names, &target.sigma) {
+        Ok(own) => warnings.extend(own.as_ref().and_then(own_error::own_error_warning)),
+        Err(e) => warnings.push(format!(
+            "the model's own predictability (a run at half its step) could not be measured: {e}"
+        )),
+    }
+    clock.lap("own-error");
     if verdict != Verdict::NothingMissing {
         for (name, j) in names.iter().zip(&judged_after) {
             if !j.reasons.is_empty() {
