@@ -766,7 +766,7 @@ type ReportState = (
     String,
     Option<String>,
     bool,
-    Option<f64>,
+    (Option<f64>, bool),
 );
 
 /// A fallback as a short code (for pickling) and back.
@@ -862,6 +862,12 @@ impl PyStepReport {
     fn relaxed_tolerance(&self) -> Option<f64> {
         self.inner.relaxed_tolerance
     }
+    /// Whether a step asked to be BDF2 (``integrator = "bdf2"`` in its scene) did not
+    /// converge as BDF2 and was taken again as the paper's impulse step.
+    #[getter]
+    fn first_order(&self) -> bool {
+        self.inner.first_order
+    }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, ReportState)> {
         let r = &slf.get().inner;
@@ -879,7 +885,7 @@ impl PyStepReport {
                 method_name(r.method_used).to_owned(),
                 fallback_code(r.fallback),
                 r.stagnated,
-                r.relaxed_tolerance,
+                (r.relaxed_tolerance, r.first_order),
             ),
         ))
     }
@@ -899,8 +905,9 @@ impl PyStepReport {
         method: &str,
         fallback: Option<&str>,
         stagnated: bool,
-        relaxed_tolerance: Option<f64>,
+        relaxed_and_first_order: (Option<f64>, bool),
     ) -> PyResult<Self> {
+        let (relaxed_tolerance, first_order) = relaxed_and_first_order;
         Ok(Self {
             inner: StepReport {
                 iterations,
@@ -914,6 +921,7 @@ impl PyStepReport {
                 fallback: fallback_of(fallback),
                 stagnated,
                 relaxed_tolerance,
+                first_order,
             },
             steps,
         })

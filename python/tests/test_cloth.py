@@ -485,3 +485,16 @@ def test_an_unreachable_tolerance_stagnates_once_and_says_the_level():
     assert report.iterations < 30 * 1000 / 10
     assert world.stagnation is not None and "cannot be reached" in world.stagnation
     assert pickle.loads(pickle.dumps(report)).relaxed_tolerance == report.relaxed_tolerance
+
+
+def test_a_scene_asks_for_the_second_order_step_and_a_report_says_when_it_fell_back():
+    text = cloth.scene("corner").resized(8, 8).to_toml()
+    text = text.replace("gravity =", 'integrator = "bdf2"\ngravity =', 1)
+    scene = Scene.from_toml(text)
+    assert 'integrator = "bdf2"' in scene.to_toml()
+    report = scene.world().step(100, dt=0.01)
+    assert report.converged
+    assert isinstance(report.first_order, bool)
+    assert pickle.loads(pickle.dumps(report)).first_order == report.first_order
+    with pytest.raises(DataError, match=r'integrator.*"rk4"'):
+        Scene.from_toml(text.replace('"bdf2"', '"rk4"'))

@@ -336,6 +336,11 @@ pub(crate) struct StepInput<'a> {
     pub(crate) params: &'a SolverParams,
     /// `1/h²` (1/s²): compliant constraints' error is `len − rest − α μ/h²`.
     pub(crate) inv_h2: f64,
+    /// Hold the momentum residual of every particle, not only of those in
+    /// contact, within the tolerance (a BDF2 step: its velocity reads the
+    /// positions of two steps, so what the solve leaves of the momentum
+    /// equation becomes velocity).
+    pub(crate) hold_momentum: bool,
 }
 
 /// An iterate and everything evaluated at it.
@@ -407,7 +412,7 @@ pub(crate) struct NewtonSolver {
     rhs: Vec<f64>,
     /// `x − x̃` of the last solve (m): the next step starts from its
     /// preview plus this correction.
-    last_correction: Vec<Vector3<f64>>,
+    pub(crate) last_correction: Vec<Vector3<f64>>,
     /// The smallest error so far after each iteration of a solve (scratch).
     best_errors: Vec<f64>,
     cur: State,
@@ -650,14 +655,18 @@ impl NewtonSolver {
         self.best_errors.clear();
         loop {
             out.max_stretch = self.cur.max_stretch;
-            if self.cur.max_stretch <= tol && self.cur.contact_residual <= tol * self.mean_rest {
+            let momentum = if input.hold_momentum {
+                self.cur.max_residual
+            } else {
+                self.cur.contact_residual
+            };
+            if self.cur.max_stretch <= tol && momentum <= tol * self.mean_rest {
                 out.converged = true;
                 break;
             }
             // The error in tolerances: stretch, and the momentum residual of
-            // particles in contact.
-            let error = (self.cur.max_stretch / tol)
-                .max(self.cur.contact_residual / (tol * self.mean_rest));
+            // particles in contact (of every particle in a BDF2 step).
+            let error = (self.cur.max_stretch / tol).max(momentum / (tol * self.mean_rest));
             if solver::stalled(&mut self.best_errors, error, STALL_WINDOW, STALL_RATIO) {
                 out.stagnated = true;
                 break;
@@ -1113,6 +1122,7 @@ mod tests {
             colliders: &[],
             params: &params,
             inv_h2: 1.0,
+            hold_momentum: false,
         };
         let mut solver = NewtonSolver::new(&c, &k).unwrap();
         let mut x = free.clone();

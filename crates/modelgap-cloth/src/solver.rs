@@ -256,6 +256,11 @@ pub struct StepReport {
     /// steps stop at the achievable level instead of stagnating again; `None`
     /// while the requested tolerance is held. Of merged reports, the largest.
     pub relaxed_tolerance: Option<f64>,
+    /// A [`Integrator::Bdf2`] step that did not converge as BDF2 within
+    /// [`BDF2_MAX_ITERATIONS`](crate::world::BDF2_MAX_ITERATIONS) Newton
+    /// iterations and was taken again as an impulse step (its iterations and
+    /// factorisations count both tries).
+    pub first_order: bool,
 }
 
 /// Whether an iteration has stagnated: pushes `error` (its error now, in
@@ -302,7 +307,8 @@ impl std::fmt::Display for Fallback {
 impl StepReport {
     /// Combines the reports of consecutive steps: summed work, worst error,
     /// converged only if every step converged, the last step's method, the
-    /// first fallback, stagnated if any step did, the largest relaxed tolerance.
+    /// first fallback, stagnated (or taken first order) if any step was, the largest relaxed
+    /// tolerance.
     #[must_use]
     pub fn merge(self, next: Self) -> Self {
         Self {
@@ -320,6 +326,7 @@ impl StepReport {
             method_used: next.method_used,
             fallback: self.fallback.or(next.fallback),
             stagnated: self.stagnated || next.stagnated,
+            first_order: self.first_order || next.first_order,
             relaxed_tolerance: match (self.relaxed_tolerance, next.relaxed_tolerance) {
                 (Some(a), Some(b)) => Some(a.max(b)),
                 (a, b) => a.or(b),

@@ -108,6 +108,9 @@ fn explain_case(name: &str, hidden: &[(&str, &[f64])]) -> Explanation {
     for r in &ex.reasons {
         println!("  reason: {r}");
     }
+    for w in ex.warnings.iter().filter(|w| w.contains("own numerics")) {
+        println!("  warning: {w}");
+    }
     for t in &ex.timings {
         println!(
             "  {:12} {:6.2} s wall {:6.2?} s CPU",

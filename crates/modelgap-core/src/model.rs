@@ -202,6 +202,20 @@ pub trait Model: Send + Sync {
         Ok(None)
     }
 
+    /// How far the model's own numerics move its prediction on `rec`: per output and per
+    /// sample (in the output's unit, ≥ 0), the largest distance of the nominal prediction
+    /// from a run at half the model's step and from a run with its start nudged far below
+    /// any measurement — no envelope and no safety factor, unlike
+    /// [`Model::prediction_spread`]. What an effect of that size on a recording of the
+    /// real system cannot be told from. `None` (the default) when the prediction is sharp.
+    ///
+    /// # Errors
+    /// [`crate::CoreError::Model`] when the model cannot simulate the recording.
+    fn numerical_error(&self, rec: &Recording) -> Result<Option<Prediction>> {
+        let _ = rec;
+        Ok(None)
+    }
+
     /// The model as the text of its file format (a bond-graph TOML), if it is
     /// file-based; after [`Model::with_effects`] it holds the new elements.
     fn to_file_text(&self) -> Option<String> {

@@ -2006,6 +2006,11 @@ class StepReport:
         """The tolerance held instead of the requested one after a step stagnated (the
         largest over the steps), or ``None``."""
 
+    @property
+    def first_order(self) -> bool:
+        """Whether a step asked to be BDF2 (``integrator = "bdf2"`` in its scene) did not
+        converge as BDF2 and was taken again as the paper's impulse step."""
+
     @staticmethod
     def _from_state(
         steps: int,
@@ -2019,7 +2024,7 @@ class StepReport:
         method: str,
         fallback: Optional[str],
         stagnated: bool,
-        relaxed_tolerance: Optional[float],
+        relaxed_and_first_order: Tuple[Optional[float], bool],
     ) -> StepReport: ...
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]: ...
 

@@ -11,7 +11,10 @@
 
 mod step;
 
-pub use step::{STALL_MARGIN, SWEEP_STALL_RATIO, SWEEP_STALL_WINDOW};
+pub use step::{
+    BDF2_BACKOFF, BDF2_MAX_ITERATIONS, BDF2_WEIGHT, STALL_MARGIN, SWEEP_STALL_RATIO,
+    SWEEP_STALL_WINDOW,
+};
 
 use std::ops::Range;
 
@@ -55,6 +58,8 @@ struct SolverWorkspace {
     /// [`Integrator::Bdf2`](crate::solver::Integrator::Bdf2): dropped when the
     /// state is edited or the topology changes.
     history: Option<History>,
+    /// Impulse steps left before BDF2 is tried again (see `BDF2_BACKOFF`).
+    bdf2_backoff: usize,
     newton: Option<NewtonSolver>,
     /// The coloured sweep (colouring and scratch), built on the first step
     /// with [`SolverParams::coloured_sweep`], dropped on a topology change.
@@ -508,6 +513,7 @@ impl ClothWorld {
         self.workspace.mu.resize(self.constraints.len(), 0.0);
         self.workspace.last_dt = None;
         self.workspace.history = None;
+        self.workspace.bdf2_backoff = 0;
     }
 
     /// Advances the world by `steps` steps of `dt` seconds; the report merges

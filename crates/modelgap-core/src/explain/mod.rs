@@ -1399,7 +1399,12 @@ pub fn explain(model: &dyn Model, rec: &Recording, opts: &ExplainOptions) -> Res
     }
     // The model's own error: how far its numerics alone move its prediction.
     match own_error::own_error(model, rec, &names, &target.sigma) {
-        Ok(own) => warnings.extend(own.as_ref().and_then(own_error::own_error_warning)),
+        Ok(Some(own)) => {
+            let cost_after = 0.5 * after_weighted.iter().map(|r| r * r).sum::<f64>();
+            let gain = (!chosen.is_empty()).then_some(cost_before - cost_after);
+            warnings.extend(own_error::own_error_warning(&own, gain, opts.significance));
+        }
+        Ok(None) => {}
         Err(e) => warnings.push(format!(
             "the model's own predictability (a run at half its step) could not be measured: {e}"
         )),
