@@ -234,6 +234,32 @@ impl ClothModel {
         Ok(scene)
     }
 
+    /// The largest distance, per marker coordinate and sample, of the nominal prediction
+    /// from the runs with `settings` (m).
+    fn largest_distance(
+        &self,
+        rec: &Recording,
+        settings: &[PredictSettings],
+    ) -> modelgap_core::Result<Prediction> {
+        let nominal = self.predict(rec)?;
+        let mut largest: Vec<Vec<f64>> =
+            nominal.values.iter().map(|v| vec![0.0; v.len()]).collect();
+        for settings in settings {
+            let other = self
+                .predict_settings(rec, &[], settings)
+                .map_err(|e| model_error(&[], e))?;
+            for ((l, a), b) in largest.iter_mut().zip(&nominal.values).zip(&other.values) {
+                for ((l, a), b) in l.iter_mut().zip(a).zip(b) {
+                    *l = l.max((a - b).abs());
+                }
+            }
+        }
+        Ok(Prediction {
+            names: nominal.names,
+            values: largest,
+        })
+    }
+
     /// Predicts the recording's marker signals with `effects`, simulated with `settings`.
     fn predict_settings(
         &self,
@@ -1098,7 +1124,6 @@ impl Model for ClothModel {
     /// the paper's step at 1e-4 lies 1.6 mm from the same step at 1e-6: more than the
     /// markers' noise, and explain named it a skin friction.
     fn numerical_error(&self, rec: &Recording) -> modelgap_core::Result<Option<Prediction>> {
-        let nominal = self.predict(rec)?;
         let half = PredictSettings {
             step_divisor: 2 * self.settings.step_divisor.max(1),
             ..self.settings.clone()
@@ -1113,22 +1138,8 @@ impl Model for ClothModel {
             stretch_tolerance: Some(tolerance / TIGHTER_TOLERANCE),
             ..self.settings.clone()
         };
-        let mut largest: Vec<Vec<f64>> =
-            nominal.values.iter().map(|v| vec![0.0; v.len()]).collect();
-        for settings in [half, nudged, tighter] {
-            let other = self
-                .predict_settings(rec, &[], &settings)
-                .map_err(|e| model_error(&[], e))?;
-            for ((l, a), b) in largest.iter_mut().zip(&nominal.values).zip(&other.values) {
-                for ((l, a), b) in l.iter_mut().zip(a).zip(b) {
-                    *l = l.max((a - b).abs());
-                }
-            }
-        }
-        Ok(Some(Prediction {
-            names: nominal.names,
-            values: largest,
-        }))
+        self.largest_distance(rec, &[half, nudged, tighter])
+            .map(Some)
     }
 
     /// The spread of the scene's prediction: [`SPREAD_FACTOR`] times the
@@ -1137,7 +1148,6 @@ impl Model for ClothModel {
     /// (Gaussian), and both — per marker coordinate, as an envelope over
     /// ±[`SPREAD_ENVELOPE`] samples. Costs four simulations (two at half the step).
     fn prediction_spread(&self, rec: &Recording) -> modelgap_core::Result<Option<Prediction>> {
-        let nominal = self.predict(rec)?;
         let divisor = self.settings.step_divisor.max(1);
         let half = PredictSettings {
             step_divisor: 2 * divisor,
@@ -1152,21 +1162,11 @@ impl Model for ClothModel {
             seed: self.settings.seed.wrapping_add(1),
             ..half.clone()
         };
-        let mut largest: Vec<Vec<f64>> =
-            nominal.values.iter().map(|v| vec![0.0; v.len()]).collect();
-        for settings in [half, perturbed, half_perturbed] {
-            let other = self
-                .predict_settings(rec, &[], &settings)
-                .map_err(|e| model_error(&[], e))?;
-            for ((l, a), b) in largest.iter_mut().zip(&nominal.values).zip(&other.values) {
-                for ((l, a), b) in l.iter_mut().zip(a).zip(b) {
-                    *l = l.max((a - b).abs());
-                }
-            }
-        }
+        let largest = self.largest_distance(rec, &[half, perturbed, half_perturbed])?;
         let spread = Prediction {
-            names: nominal.names,
+            names: largest.names,
             values: largest
+                .values
                 .iter()
                 .map(|l| {
                     envelope(l, SPREAD_ENVELOPE)
