@@ -11,8 +11,8 @@ use modelgap::cloth::solver::Fallback;
 use modelgap::cloth::trajectory::{MarkerSelection, RunOptions, run_scene, write_run_path};
 use modelgap::cloth::{
     BuildMesh as _, ClothError, ClothId, ClothMesh, ClothModel, ClothWorld, Collider, GridCloth,
-    MarkerRecording, Method, PinPath, PredictSettings, Scene, Shape, SolverParams, StepReport,
-    kinematic, scenes,
+    Integrator, MarkerRecording, Method, PinPath, PredictSettings, Scene, Shape, SolverParams,
+    StepReport, kinematic, scenes,
 };
 use modelgap::math::Vector3;
 use modelgap::{Effect, Model};
@@ -536,6 +536,23 @@ fn method_name(m: Method) -> &'static str {
     }
 }
 
+fn integrator_name(i: Integrator) -> &'static str {
+    match i {
+        Integrator::Bdf2 => "bdf2",
+        _ => "impulse",
+    }
+}
+
+fn parse_integrator(s: &str) -> PyResult<Integrator> {
+    match s {
+        "impulse" => Ok(Integrator::Impulse),
+        "bdf2" => Ok(Integrator::Bdf2),
+        _ => Err(data_error(format!(
+            "integrator must be \"impulse\" or \"bdf2\", found \"{s}\""
+        ))),
+    }
+}
+
 fn parse_method(s: &str) -> PyResult<Method> {
     match s {
         "gauss-seidel" | "gauss_seidel" => Ok(Method::GaussSeidel),
@@ -548,7 +565,7 @@ fn parse_method(s: &str) -> PyResult<Method> {
 }
 
 /// What pickling stores of solver parameters, in the constructor's order.
-type ParamsState = (String, f64, usize, [f64; 3], usize, bool, f64, f64);
+type ParamsState = (String, f64, usize, [f64; 3], usize, bool, f64, f64, String);
 
 /// Parameters of the cloth solver (a value: change one with ``replace``).
 ///
@@ -556,8 +573,9 @@ type ParamsState = (String, f64, usize, [f64; 3], usize, bool, f64, f64);
 /// paper's any-time iteration) or ``"strips"`` (the paper's acyclic strips); ``stretch_tolerance`` the allowed relative stretch (default 1e-4, 0.01 %);
 /// ``max_iterations`` the limit per step (running out is reported, not raised);
 /// ``gravity`` in m/s²; ``velocity_iterations`` sweeps of the velocity part;
-/// ``warm_start`` reuses the last step's impulses; ``refactor_ratio`` (Newton) and
-/// ``contact_tolerance`` (m, allowed penetration).
+/// ``warm_start`` reuses the last step's impulses; ``refactor_ratio`` (Newton),
+/// ``contact_tolerance`` (m, allowed penetration) and ``integrator`` (``"impulse"``, the
+/// paper's step, or ``"bdf2"``, second order).
 #[pyclass(name = "SolverParams", module = "modelgap.cloth", frozen)]
 #[derive(Clone)]
 pub struct PySolverParams {
@@ -576,6 +594,7 @@ impl PySolverParams {
             p.warm_start,
             p.refactor_ratio,
             p.contact_tolerance,
+            integrator_name(p.integrator).to_owned(),
         )
     }
 }
@@ -583,7 +602,7 @@ impl PySolverParams {
 #[pymethods]
 impl PySolverParams {
     #[new]
-    #[pyo3(signature = (*, method = "newton", stretch_tolerance = 1e-4, max_iterations = 1000, gravity = None, velocity_iterations = 0, warm_start = true, refactor_ratio = 0.3, contact_tolerance = 1e-4))]
+    #[pyo3(signature = (*, method = "newton", stretch_tolerance = 1e-4, max_iterations = 1000, gravity = None, velocity_iterations = 0, warm_start = true, refactor_ratio = 0.3, contact_tolerance = 1e-4, integrator = "impulse"))]
     #[allow(clippy::too_many_arguments)] // keyword-only options of the Python API
     fn new(
         method: &str,
@@ -594,6 +613,7 @@ impl PySolverParams {
         warm_start: bool,
         refactor_ratio: f64,
         contact_tolerance: f64,
+        integrator: &str,
     ) -> PyResult<Self> {
         let defaults = SolverParams::default();
         if max_iterations == 0 {
@@ -617,6 +637,7 @@ impl PySolverParams {
                 warm_start,
                 refactor_ratio,
                 contact_tolerance: positive("contact_tolerance", contact_tolerance)?,
+                integrator: parse_integrator(integrator)?,
                 ..defaults
             },
         })
@@ -647,7 +668,7 @@ impl PySolverParams {
 
     /// The parameters as a dict of the constructor's keywords.
     fn kwargs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let (method, tol, max_it, g, vel, warm, ratio, contact) = self.state();
+        let (method, tol, max_it, g, vel, warm, ratio, contact, integrator) = self.state();
         let d = PyDict::new(py);
         d.set_item("method", method)?;
         d.set_item("stretch_tolerance", tol)?;
@@ -657,6 +678,7 @@ impl PySolverParams {
         d.set_item("warm_start", warm)?;
         d.set_item("refactor_ratio", ratio)?;
         d.set_item("contact_tolerance", contact)?;
+        d.set_item("integrator", integrator)?;
         Ok(d)
     }
 
@@ -701,6 +723,11 @@ impl PySolverParams {
     fn contact_tolerance(&self) -> f64 {
         self.inner.contact_tolerance
     }
+    /// ``"impulse"`` (the paper's step) or ``"bdf2"`` (second order).
+    #[getter]
+    fn integrator(&self) -> &'static str {
+        integrator_name(self.inner.integrator)
+    }
 
     /// Restores pickled parameters (see ``__reduce__``).
     #[staticmethod]
@@ -715,6 +742,7 @@ impl PySolverParams {
         warm_start: bool,
         refactor_ratio: f64,
         contact_tolerance: f64,
+        integrator: &str,
     ) -> PyResult<Self> {
         let g = gravity.into_pyobject(py)?;
         Self::new(
@@ -726,6 +754,7 @@ impl PySolverParams {
             warm_start,
             refactor_ratio,
             contact_tolerance,
+            integrator,
         )
     }
 

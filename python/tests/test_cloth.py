@@ -498,3 +498,9 @@ def test_a_scene_asks_for_the_second_order_step_and_a_report_says_when_it_fell_b
     assert pickle.loads(pickle.dumps(report)).first_order == report.first_order
     with pytest.raises(DataError, match=r'integrator.*"rk4"'):
         Scene.from_toml(text.replace('"bdf2"', '"rk4"'))
+    assert scene.params.integrator == "bdf2"
+    params = SolverParams(integrator="bdf2")
+    assert params.kwargs()["integrator"] == "bdf2"
+    assert pickle.loads(pickle.dumps(params)) == params != SolverParams()
+    with pytest.raises(DataError, match='integrator must be "impulse" or "bdf2", found "rk4"'):
+        SolverParams(integrator="rk4")

@@ -1857,6 +1857,7 @@ class SolverParams:
         warm_start: bool = True,
         refactor_ratio: float = 0.3,
         contact_tolerance: float = 1e-4,
+        integrator: str = "impulse",
     ) -> SolverParams:
         """Sets the solver's parameters (keywords only).
 
@@ -1876,9 +1877,12 @@ class SolverParams:
             refactor_ratio: Newton only: refactor when an iteration shrinks the residual by
                 less than this factor, in (0, 1).
             contact_tolerance: The allowed penetration into colliders (m), positive.
+            integrator: ``"impulse"`` (the paper's step, first order) or ``"bdf2"`` (second
+                order; a step that does not converge as BDF2 is taken again as an impulse
+                step, ``StepReport.first_order``).
 
         Raises:
-            DataError: For an unknown method or a value out of range.
+            DataError: For an unknown method or integrator, or a value out of range.
         """
 
     def replace(self, **changes: Any) -> SolverParams:
@@ -1933,6 +1937,10 @@ class SolverParams:
     def contact_tolerance(self) -> float:
         """The allowed penetration into colliders (m)."""
 
+    @property
+    def integrator(self) -> str:
+        """``"impulse"`` (the paper's step) or ``"bdf2"`` (second order)."""
+
     @staticmethod
     def _from_state(
         method: str,
@@ -1943,6 +1951,7 @@ class SolverParams:
         warm_start: bool,
         refactor_ratio: float,
         contact_tolerance: float,
+        integrator: str,
     ) -> SolverParams: ...
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]: ...
     def __eq__(self, value: object, /) -> bool: ...
