@@ -91,8 +91,8 @@ pub(super) fn own_error_warning(
          of the scores",
         own.ratio, own.worst.1, own.worst.0, own.cost
     );
-    let refine = "refine the model's numerics (a smaller dt or stretch tolerance, or for a \
-                  cloth integrator = \"bdf2\")";
+    let refine = "refine the model's numerics (a smaller dt or stretch tolerance; for a \
+                  cloth, integrator = \"bdf2\" if it is not already)";
     match gain {
         Some(g) if g < OWN_ERROR_MARGIN * own.cost => Some(format!(
             "the effect chosen lowers the cost by {g:.4}, only {:.2}× what {moved}: it may be \
