@@ -743,3 +743,34 @@ fn noise_all_sets_every_marker_coordinate_and_rms_is_given_both_ways() {
     );
     assert!(text.contains("per marker (3-D RMS, mm)"), "{text}");
 }
+
+/// A scene on the second-order step: `cloth bench` counts the steps it took again as the
+/// paper's impulse step (`first_order_steps`), and says so in its text (the two-corners
+/// cloth's taut row does not converge as BDF2 at its first steps).
+#[test]
+fn bench_counts_the_bdf2_steps_taken_again_first_order() {
+    let dir = TempDir::new("bdf2");
+    let path = dir.path("two-corners-bdf2.toml");
+    let scene = modelgap::cloth::scenes::two_corners()
+        .resized(12, 12)
+        .unwrap();
+    let toml =
+        scene
+            .to_toml()
+            .unwrap()
+            .replacen("gravity =", "integrator = \"bdf2\"\ngravity =", 1);
+    std::fs::write(&path, toml).unwrap();
+    let args = ["cloth", "bench", "--scene", &path, "--duration", "0.3"];
+    let json: serde_json::Value =
+        serde_json::from_str(&ok(&[&args[..], &["--json"]].concat())).unwrap();
+    let first_order = json["first_order_steps"].as_u64().unwrap();
+    assert!((1..30).contains(&first_order), "{json}");
+    let out = ok(&args);
+    assert!(
+        out.contains(&format!(
+            "{first_order} of 30 steps did not converge as BDF2 and were taken as the paper's \
+             impulse step"
+        )),
+        "{out}"
+    );
+}

@@ -255,6 +255,13 @@ fn run_summary(run: &ClothRun, wall_s: f64, out: &Path) -> String {
             String::new()
         },
     );
+    if st.first_order_steps > 0 {
+        let _ = writeln!(
+            s,
+            "{} of {} steps did not converge as BDF2 and were taken as the paper's impulse step",
+            st.first_order_steps, st.steps
+        );
+    }
     if let Some(stagnation) = &st.stagnation {
         let _ = writeln!(s, "warning: {stagnation}");
     }
@@ -296,6 +303,8 @@ struct BenchReport {
     unconverged_steps: usize,
     /// Steps that ran another method than the one asked for (Newton could not be built).
     fallback_steps: usize,
+    /// Steps of a BDF2 scene taken again as the paper's impulse step.
+    first_order_steps: usize,
     /// The stretch tolerance could not be reached: the warning, naming the level held.
     warning: Option<String>,
     /// Wall-clock time of the run (s): what a user waits, and what a shared machine slows.
@@ -379,6 +388,7 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         max_iterations: st.max_iterations,
         unconverged_steps: st.unconverged_steps,
         fallback_steps: st.fallback_steps,
+        first_order_steps: st.first_order_steps,
         warning: st.stagnation.map(|s| s.to_string()),
         wall_s,
         x_real_time: real_time_factor(&st, wall_s),
@@ -439,6 +449,13 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         report.unconverged_steps,
         report.fallback_steps
     );
+    if report.first_order_steps > 0 {
+        let _ = writeln!(
+            s,
+            "{} of {} steps did not converge as BDF2 and were taken as the paper's impulse step",
+            report.first_order_steps, report.steps
+        );
+    }
     if let Some(w) = &report.warning {
         let _ = writeln!(s, "warning: {w}");
     }

@@ -147,6 +147,9 @@ pub struct RunStats {
     /// Steps that ran Gauss–Seidel instead of the scene's method because it
     /// could not run ([`StepReport::fallback`](crate::StepReport::fallback)).
     pub fallback_steps: usize,
+    /// Steps of a BDF2 scene taken again as the paper's impulse step
+    /// ([`StepReport::first_order`](crate::StepReport::first_order)).
+    pub first_order_steps: usize,
     /// Where the scene's stretch tolerance proved out of reach, and the level held
     /// instead ([`crate::Stagnation`]; its text is the warning to show); `None` when
     /// every step could reach it.
@@ -296,6 +299,7 @@ pub fn run_scene(scene: &Scene, options: &RunOptions) -> Result<ClothRun> {
         stats.max_stretch = stats.max_stretch.max(report.max_stretch);
         stats.unconverged_steps += usize::from(!report.converged);
         stats.fallback_steps += usize::from(report.fallback.is_some());
+        stats.first_order_steps += usize::from(report.first_order);
         stats.stagnation = sw.world.stagnation().copied();
         if step % stride == 0 || step == n_steps {
             record(step, sw.positions());
