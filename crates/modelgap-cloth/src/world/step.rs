@@ -99,18 +99,22 @@ impl ClothWorld {
         let mut second_order = self.second_order(dt);
         let choice = self.prepare_solver()?;
         let mut report = if second_order {
-            // A BDF2 step that does not converge within BDF2_MAX_ITERATIONS (a snap, a
-            // taut row at its first steps) is taken again as an impulse step.
+            // A Newton BDF2 step that does not converge within BDF2_MAX_ITERATIONS (a
+            // snap, a taut row at its first steps) is taken again as an impulse step; the
+            // sweeps, which need far more iterations, run theirs to the limit.
             // What the try changes of the warm start, restored for the impulse step.
+            let newton = choice.solver == Solver::Newton;
             let mu = self.workspace.mu.clone();
             let correction = (self.workspace.newton.as_ref()).map(|n| n.last_correction.clone());
             let limit = self.params.max_iterations;
-            self.params.max_iterations = limit.min(BDF2_MAX_ITERATIONS);
+            if newton {
+                self.params.max_iterations = limit.min(BDF2_MAX_ITERATIONS);
+            }
             self.preview(dt, t_end, true);
             self.warm_start(BDF2_WEIGHT * dt, choice.solver);
             let tried = self.solve_constraints(BDF2_WEIGHT * dt, choice, true);
             self.params.max_iterations = limit;
-            if tried.converged {
+            if tried.converged || !newton {
                 tried
             } else {
                 second_order = false;
