@@ -20,6 +20,7 @@
 use std::path::Path;
 
 use modelgap_bond::element::Range;
+use modelgap_bond::input_hold::HoldReason;
 use modelgap_bond::model::Start;
 pub use modelgap_bond::simulate::Hold;
 use modelgap_bond::{BondModel, file::read_model_path, library};
@@ -53,7 +54,7 @@ pub const CLOTH_SCENES: [&str; 3] = ["corner", "two-corners", "drape"];
 
 /// How a model is loaded for the loop. The options of one kind are refused, with a typed
 /// error saying so, for a model of the other.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct LoadOptions {
     /// Parameters or input defaults set first, in order (bond graphs: `--set R=1.2`; a
     /// cloth scene is edited in its file).
@@ -61,24 +62,13 @@ pub struct LoadOptions {
     /// Start at the steady state under the recording's first inputs instead of at rest
     /// (bond graphs; a cloth scene starts from its own initial state). Default false.
     pub steady_start: bool,
-    /// How recorded inputs are held between samples (bond graphs). Default zero-order hold,
-    /// right for a commanded input.
-    pub hold: Hold,
+    /// How recorded inputs are held between samples (bond graphs); `None` (the default):
+    /// chosen per input from the recording by [`settle_holds`] (zero-order hold until then).
+    pub hold: Option<Hold>,
     /// Parameters to mark unknown for calibration, with their bounds (`None`: the default
     /// bounds around the value, see [`modelgap_bond::element::Range::around`]), beside those
     /// the model file marks `free` (bond graphs: `modelgap fit --free k1=0:1`).
     pub free: Vec<(String, Option<(f64, f64)>)>,
-}
-
-impl Default for LoadOptions {
-    fn default() -> LoadOptions {
-        LoadOptions {
-            set: Vec::new(),
-            steady_start: false,
-            hold: Hold::Zero,
-            free: Vec::new(),
-        }
-    }
 }
 
 /// The names of every built-in model, comma-separated.
@@ -230,7 +220,9 @@ fn load_bond(path_or_name: &str, opts: &LoadOptions) -> Result<BondModel> {
     } else {
         Start::Rest
     };
-    Ok(BondModel::new(g).with_start(start).with_hold(opts.hold))
+    Ok(BondModel::new(g)
+        .with_start(start)
+        .with_hold(opts.hold.unwrap_or(Hold::Zero)))
 }
 
 /// A cloth scene file or built-in; the bond-graph options are refused.
@@ -248,7 +240,7 @@ fn load_cloth(path_or_name: &str, opts: &LoadOptions) -> Result<ClothModel> {
              candidates fit its material and air"
         )));
     }
-    if opts.steady_start || opts.hold != Hold::Zero {
+    if opts.steady_start || opts.hold.is_some() {
         return Err(Error::Input(
             "--steady-start and --hold apply to bond-graph models; a cloth scene starts from its \
              own initial state"
@@ -303,6 +295,21 @@ pub fn load_recording_with(
             }
             Ok((m.read_recording(path)?, Vec::new()))
         }
+    }
+}
+
+/// Chooses how a bond graph holds each input `rec` records between samples
+/// ([`BondModel::settle_holds`]: an input that steps is held at each sample's value; any
+/// other the way the model predicts the recording better) and returns a note for each
+/// input that does not step, saying how it is held and why (a stepping input held at its
+/// samples' values goes without saying); nothing for a cloth scene.
+pub fn settle_holds(model: &mut AnyModel, rec: &Recording) -> Vec<String> {
+    match model {
+        AnyModel::BondGraph(m) => (m.settle_holds(rec).iter())
+            .filter(|h| !matches!(h.reason, HoldReason::Steps { .. }))
+            .map(ToString::to_string)
+            .collect(),
+        AnyModel::ClothScene(_) => Vec::new(),
     }
 }
 

@@ -307,7 +307,7 @@ fn silverbox_missing_effort_follows_the_cubic_spring() {
     use modelgap::{CalibrationOptions, LoadOptions, calibrate, load_model};
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let opts = LoadOptions {
-        hold: Hold::Linear,
+        hold: Some(Hold::Linear),
         ..LoadOptions::default()
     };
     let path = root.join("examples/models/silverbox-linear.toml");
@@ -446,7 +446,7 @@ fn oscillator(extra: impl Fn(f64, f64) -> f64, rho: f64, seed: u64) -> Recording
 fn silverbox_linear() -> Box<dyn modelgap::Model> {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let opts = modelgap::LoadOptions {
-        hold: Hold::Linear,
+        hold: Some(Hold::Linear),
         ..modelgap::LoadOptions::default()
     };
     let path = root.join("examples/models/silverbox-linear.toml");

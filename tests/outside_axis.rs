@@ -94,7 +94,7 @@ fn model() -> Box<dyn Model> {
     let path = root.join("examples/models/linear-axis.toml");
     // The force is recorded at 1 kHz from a smooth drive: read between samples linearly.
     let opts = LoadOptions {
-        hold: Hold::Linear,
+        hold: Some(Hold::Linear),
         ..LoadOptions::default()
     };
     load_model(path.to_str().unwrap(), &opts).unwrap()

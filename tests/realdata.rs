@@ -36,7 +36,7 @@ fn rms_of(model: &dyn Model, rec: &Recording) -> f64 {
 /// The linear model calibrated on the estimation record, and its error on the arrow.
 fn calibrated_linear() -> (Box<dyn Model>, Recording, Recording, f64) {
     let opts = LoadOptions {
-        hold: Hold::Linear, // an analog input behind a reconstruction filter
+        hold: Some(Hold::Linear), // an analog input behind a reconstruction filter
         ..LoadOptions::default()
     };
     let model = load_model(root(MODEL).to_str().unwrap(), &opts).unwrap();

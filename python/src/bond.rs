@@ -82,6 +82,23 @@ fn hold_name(h: Hold) -> &'static str {
     }
 }
 
+/// A model's hold: `None` is `"auto"` (chosen per input from each recording).
+fn model_hold_name(h: Option<Hold>) -> &'static str {
+    h.map_or("auto", hold_name)
+}
+
+/// A model's hold: `"auto"`, `"zoh"` or `"linear"`.
+pub fn parse_model_hold(s: &str) -> PyResult<Option<Hold>> {
+    match s {
+        "auto" => Ok(None),
+        "zoh" | "zero" => Ok(Some(Hold::Zero)),
+        "linear" => Ok(Some(Hold::Linear)),
+        _ => Err(data_error(format!(
+            "hold must be \"auto\", \"zoh\" or \"linear\", found \"{s}\""
+        ))),
+    }
+}
+
 fn parse_hold(s: &str) -> PyResult<Hold> {
     match s {
         "zoh" | "zero" => Ok(Hold::Zero),
@@ -174,8 +191,9 @@ type ModelState = (String, String, String, String);
 pub struct PyBondModel {
     /// The model as loaded (and `set`), with its start and input hold.
     base: BondModel,
-    /// How recorded inputs are held (mirrors `base`, which keeps it private).
-    hold: Hold,
+    /// How recorded inputs are held: `None` chosen per input from each recording
+    /// ([`BondModel::settle_holds`]), else as given (mirrored in `base`).
+    hold: Option<Hold>,
     /// Effects built in on top of `base`, in order.
     effects: Vec<Effect>,
     /// `base` with `effects`: what the loop works on.
@@ -187,8 +205,13 @@ pub struct PyBondModel {
 }
 
 impl PyBondModel {
-    fn build(graph: BondGraph, start: Start, hold: Hold, effects: Vec<Effect>) -> PyResult<Self> {
-        let base = BondModel::new(graph).with_start(start).with_hold(hold);
+    fn build(
+        graph: BondGraph,
+        start: Start,
+        hold: Option<Hold>,
+        effects: Vec<Effect>,
+    ) -> PyResult<Self> {
+        let base = (BondModel::new(graph).with_start(start)).with_hold(hold.unwrap_or(Hold::Zero));
         let pairs: Vec<(&modelgap::Candidate, &[f64])> = effects
             .iter()
             .map(|e| (&e.candidate, e.values.as_slice()))
@@ -210,12 +233,12 @@ impl PyBondModel {
     }
 
     fn from_graph(g: BondGraph) -> PyResult<Self> {
-        Self::build(g, Start::Rest, Hold::Zero, Vec::new())
+        Self::build(g, Start::Rest, None, Vec::new())
     }
 
     /// The class of a model loaded by the library ([`modelgap::load::load`]), holding
-    /// recorded inputs as `hold`.
-    pub fn from_model(m: &BondModel, hold: Hold) -> PyResult<Self> {
+    /// recorded inputs as `hold` (`None`: chosen per input from each recording).
+    pub fn from_model(m: &BondModel, hold: Option<Hold>) -> PyResult<Self> {
         Self::build(m.graph().clone(), m.start(), hold, Vec::new())
     }
 
@@ -224,7 +247,30 @@ impl PyBondModel {
         self.model.clone()
     }
 
-    fn rebuilt(&self, start: Start, hold: Hold, effects: Vec<Effect>) -> PyResult<Self> {
+    /// The loop's model for `rec`: with the hold `"auto"`, each input held as
+    /// [`BondModel::settle_holds`] chooses on `rec`; also the notes saying how and why.
+    pub fn loop_model_for(
+        &self,
+        rec: &modelgap::Recording,
+    ) -> PyResult<(Arc<dyn Model>, Vec<String>)> {
+        if self.hold.is_some() {
+            return Ok((self.model.clone(), Vec::new()));
+        }
+        let mut base = self.base.clone();
+        let notes = base
+            .settle_holds(rec)
+            .iter()
+            .map(ToString::to_string)
+            .collect();
+        let model: Arc<dyn Model> = if self.effects.is_empty() {
+            Arc::new(base)
+        } else {
+            Arc::from(base.with_effects(&self.effects).map_err(to_py_err)?)
+        };
+        Ok((model, notes))
+    }
+
+    fn rebuilt(&self, start: Start, hold: Option<Hold>, effects: Vec<Effect>) -> PyResult<Self> {
         Self::build(self.base.graph().clone(), start, hold, effects)
     }
 
@@ -300,9 +346,22 @@ impl PyBondModel {
         self.rebuilt(parse_start(start)?, self.hold, self.effects.clone())
     }
 
-    /// The same model with recorded inputs held ``"zoh"`` (default) or ``"linear"``.
+    /// The same model with recorded inputs held ``"auto"`` (the default: each input that
+    /// steps held at its samples' values, any other the way the model predicts the recording
+    /// better), ``"zoh"`` or ``"linear"``.
     fn with_hold(&self, hold: &str) -> PyResult<Self> {
-        self.rebuilt(self.base.start(), parse_hold(hold)?, self.effects.clone())
+        self.rebuilt(
+            self.base.start(),
+            parse_model_hold(hold)?,
+            self.effects.clone(),
+        )
+    }
+
+    /// How ``"auto"`` holds each input ``rec`` records, and why: one sentence per input
+    /// that is not constant (the notes ``modelgap explain`` prints); empty for a model with
+    /// its hold given.
+    fn hold_notes(&self, rec: &Bound<'_, crate::core_api::PyRecording>) -> PyResult<Vec<String>> {
+        Ok(self.loop_model_for(&rec.get().inner)?.1)
     }
 
     /// A new model with the effects (from ``Explanation.effects``) built in.
@@ -355,10 +414,10 @@ impl PyBondModel {
         start_name(self.base.start())
     }
 
-    /// How recorded inputs are held: ``"zoh"`` or ``"linear"``.
+    /// How recorded inputs are held: ``"auto"``, ``"zoh"`` or ``"linear"``.
     #[getter]
     fn hold(&self) -> &'static str {
-        hold_name(self.hold)
+        model_hold_name(self.hold)
     }
 
     /// Parameter values by name (SI units), effects included; a fresh dict.
@@ -668,7 +727,7 @@ impl PyBondModel {
         let g = read_model(text).map_err(to_py_err)?;
         let effects: Vec<Effect> = serde_json::from_str(effects)
             .map_err(|e| data_error(format!("not the JSON of a list of effects: {e}")))?;
-        Self::build(g, parse_start(start)?, parse_hold(hold)?, effects)
+        Self::build(g, parse_start(start)?, parse_model_hold(hold)?, effects)
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, ModelState)> {
@@ -680,7 +739,7 @@ impl PyBondModel {
             (
                 modelgap::bond::file::write_model(me.base.graph()),
                 start_name(me.base.start()).to_owned(),
-                hold_name(me.hold).to_owned(),
+                model_hold_name(me.hold).to_owned(),
                 effects,
             ),
         ))
@@ -698,7 +757,7 @@ impl PyBondModel {
             self.graph.params().len(),
             self.effects.len(),
             start_name(self.base.start()),
-            hold_name(self.hold)
+            model_hold_name(self.hold)
         )
     }
 }

@@ -8,7 +8,7 @@ use pyo3::prelude::*;
 
 use crate::convert::run_watched;
 use crate::core_api::{PyEffect, PyRecording};
-use crate::model::model_of;
+use crate::model::model_for;
 
 /// Registers `fit` and `Calibration`.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -124,7 +124,7 @@ fn py_fit(
     model: &Bound<'_, PyAny>,
     rec: &Bound<'_, PyRecording>,
 ) -> PyResult<PyCalibration> {
-    let loop_model = model_of(model)?;
+    let loop_model = model_for(model, &rec.get().inner)?;
     let model = loop_model.model();
     let rec = &rec.get().inner;
     let result = run_watched(py, None, move |watch| {

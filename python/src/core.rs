@@ -18,7 +18,7 @@ use crate::convert::{
     array1, columns_to_array2, detached, noise_map, recording_from_py, run_watched,
 };
 use crate::errors::{data_error, to_py_err};
-use crate::model::model_of;
+use crate::model::model_for;
 
 /// Registers the core classes and functions.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -962,7 +962,7 @@ fn py_compare(
     min_window: Option<f64>,
     predictability: bool,
 ) -> PyResult<PyComparison> {
-    let loop_model = model_of(model)?;
+    let loop_model = model_for(model, &rec.get().inner)?;
     let model = loop_model.model();
     let opts = CompareOptions {
         noise: noise_map(noise)?,
@@ -1022,7 +1022,7 @@ fn py_explain(
     only: Option<Vec<String>>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyExplanation> {
-    let loop_model = model_of(model)?;
+    let loop_model = model_for(model, &rec.get().inner)?;
     let model = loop_model.model();
     let noise = noise_map(noise)?;
     let rec = &rec.get().inner;

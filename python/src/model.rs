@@ -552,6 +552,18 @@ pub fn model_of(obj: &Bound<'_, PyAny>) -> PyResult<LoopModel> {
     Ok(LoopModel::Python(Arc::new(PythonModel::wrap(obj)?)))
 }
 
+/// The loop's model behind a Python model object, meeting `rec`: a `BondModel` whose hold
+/// is `"auto"` holds each input as chosen on `rec` ([`PyBondModel::loop_model_for`]).
+///
+/// # Errors
+/// As [`model_of`]; the model's errors when it cannot be built.
+pub fn model_for(obj: &Bound<'_, PyAny>, rec: &modelgap::Recording) -> PyResult<LoopModel> {
+    if let Ok(m) = obj.cast::<PyBondModel>() {
+        return Ok(LoopModel::Rust(m.borrow().loop_model_for(rec)?.0));
+    }
+    model_of(obj)
+}
+
 /// Loads a model by file or built-in name: a ``BondModel`` for a bond-graph model file or
 /// ``dc-motor``/``buck-motor``, a ``ClothModel`` for a scene file (a ``[cloth]`` table) or
 /// ``corner``/``two-corners``/``drape``. ``set`` changes bond-graph parameters or input
@@ -559,7 +571,7 @@ pub fn model_of(obj: &Bound<'_, PyAny>) -> PyResult<LoopModel> {
 /// bond-graph model meets a recording. Raises ``DataError`` naming the file, line and
 /// element, or the option a model's kind does not take.
 #[pyfunction]
-#[pyo3(signature = (model, *, set = None, steady_start = false, hold = "zoh"))]
+#[pyo3(signature = (model, *, set = None, steady_start = false, hold = "auto"))]
 fn load_model(
     py: Python<'_>,
     model: &str,
@@ -567,15 +579,7 @@ fn load_model(
     steady_start: bool,
     hold: &str,
 ) -> PyResult<Py<PyAny>> {
-    let hold_kind = match hold {
-        "zoh" => modelgap::load::Hold::Zero,
-        "linear" => modelgap::load::Hold::Linear,
-        other => {
-            return Err(data_error(format!(
-                "hold must be \"zoh\" or \"linear\", found {other:?}"
-            )));
-        }
-    };
+    let hold_kind = crate::bond::parse_model_hold(hold)?;
     let opts = modelgap::LoadOptions {
         set: set.unwrap_or_default().into_iter().collect(),
         steady_start,

@@ -42,9 +42,10 @@ pub struct FitArgs {
     #[arg(long)]
     pub steady_start: bool,
 
-    /// How recorded inputs are held between samples: zoh (a commanded input) or linear (a
-    /// sampled analog input)
-    #[arg(long, value_enum, default_value_t = HoldArg::Zoh)]
+    /// How recorded inputs are held between samples: auto (each input that steps held at its
+    /// samples' values, any other the way the model predicts the recording better), zoh (a
+    /// commanded input) or linear (a sampled analog input)
+    #[arg(long, value_enum, default_value_t = HoldArg::Auto)]
     pub hold: HoldArg,
 
     /// Print the result as JSON: `parameters` (name, unit, value, std_error, at_bound, start,
@@ -116,6 +117,10 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
     }
     let (rec, mut notes) =
         modelgap::load::load_recording_with(&args.data, &model, &args.csv.options())?;
+    let mut model = model;
+    if args.hold == HoldArg::Auto {
+        notes.extend(modelgap::load::settle_holds(&mut model, &rec));
+    }
     let model = model.into_model();
     let label = args.data.display().to_string();
     notes.extend(check_fit(
@@ -213,7 +218,7 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
             p.display(),
             args.data.display(),
             if args.steady_start { " --steady-start" } else { "" },
-            if args.hold == HoldArg::Linear { " --hold linear" } else { "" },
+            args.hold.flag(),
             args.csv
                 .to_args()
                 .iter()

@@ -32,8 +32,13 @@ pub struct ModelArgs {
 }
 
 impl ModelArgs {
-    /// The loader's options: these `--set`s, then the start and input hold given.
-    pub fn load_options(&self, steady_start: bool, hold: modelgap::load::Hold) -> LoadOptions {
+    /// The loader's options: these `--set`s, then the start and input hold given (`None`:
+    /// chosen from the recording).
+    pub fn load_options(
+        &self,
+        steady_start: bool,
+        hold: Option<modelgap::load::Hold>,
+    ) -> LoadOptions {
         LoadOptions {
             set: self.set.iter().map(|a| (a.name.clone(), a.value)).collect(),
             steady_start,

@@ -50,9 +50,11 @@ pub struct LoopArgs {
     #[arg(long)]
     pub steady_start: bool,
 
-    /// How recorded inputs are held between samples: zoh (a commanded input that changes at
-    /// a sample and stays) or linear (a sampled analog input)
-    #[arg(long, value_enum, default_value_t = HoldArg::Zoh)]
+    /// How recorded inputs are held between samples (bond graphs): auto (each input that
+    /// steps held at its samples' values, any other the way the model predicts the recording
+    /// better; said in a note), zoh (a commanded input that changes at a sample and stays) or
+    /// linear (a sampled analog input)
+    #[arg(long, value_enum, default_value_t = HoldArg::Auto)]
     pub hold: HoldArg,
 
     /// The noise floor of a measured output, NAME=SIGMA in the output's unit (repeatable);
@@ -87,17 +89,32 @@ pub struct LoopArgs {
 /// How recorded inputs are held between samples (`--hold`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum HoldArg {
+    /// Chosen per input from the recording: an input that steps is held at its samples'
+    /// values, any other the way the model predicts the recording better
+    Auto,
     /// Each sample's value until the next sample (zero-order hold)
     Zoh,
     /// Straight lines between samples
     Linear,
 }
 
-impl From<HoldArg> for Hold {
-    fn from(h: HoldArg) -> Hold {
+impl From<HoldArg> for Option<Hold> {
+    fn from(h: HoldArg) -> Option<Hold> {
         match h {
-            HoldArg::Zoh => Hold::Zero,
-            HoldArg::Linear => Hold::Linear,
+            HoldArg::Auto => None,
+            HoldArg::Zoh => Some(Hold::Zero),
+            HoldArg::Linear => Some(Hold::Linear),
+        }
+    }
+}
+
+impl HoldArg {
+    /// The flag that asks for this hold again in a command line (nothing for the default).
+    pub fn flag(self) -> &'static str {
+        match self {
+            HoldArg::Auto => "",
+            HoldArg::Zoh => " --hold zoh",
+            HoldArg::Linear => " --hold linear",
         }
     }
 }
@@ -248,6 +265,10 @@ pub fn load_loop(args: &LoopArgs) -> anyhow::Result<Loaded> {
     }
     let (rec, mut notes) = modelgap::load::load_recording_with(path, &model, &args.csv.options())
         .with_context(|| format!("reading recording {}", path.display()))?;
+    let mut model = model;
+    if args.hold == HoldArg::Auto {
+        notes.extend(modelgap::load::settle_holds(&mut model, &rec));
+    }
     let model = model.into_model();
     let noise = noise_floors(&args.noise, model.as_ref(), &rec);
     notes.extend(check_fit(
@@ -375,8 +396,8 @@ pub fn args_text_with_model(args: &LoopArgs, model: Option<&Path>) -> String {
     if args.steady_start {
         parts.push("--steady-start".to_owned());
     }
-    if args.hold == HoldArg::Linear {
-        parts.push("--hold linear".to_owned());
+    if args.hold != HoldArg::Auto {
+        parts.push(args.hold.flag().trim_start().to_owned());
     }
     for a in &args.noise {
         parts.push(format!("--noise {}={}", a.name, a.value));

@@ -33,7 +33,7 @@ use crate::error::Result;
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
 use crate::model::BondModel;
-use crate::simulate::{Drive, Inputs};
+use crate::simulate::Drive;
 
 /// The name of the unknown input the estimate adds.
 const UNKNOWN: &str = "d_missing";
@@ -398,7 +398,7 @@ fn estimate_at(
         return None;
     }
     let input_names: Vec<String> = graph.inputs().keys().cloned().collect();
-    let inputs = Inputs::from_recording_with(rec, &input_names, model.hold());
+    let inputs = model.inputs_of(graph, rec);
     let drives: Vec<Drive> = (cm.input_names.iter())
         .map(|name| {
             inputs.get(name).cloned().unwrap_or_else(|| {

@@ -52,6 +52,7 @@ pub mod expr;
 pub mod file;
 pub mod graph;
 pub mod hidden;
+pub mod input_hold;
 pub mod library;
 pub mod model;
 pub mod notation;

@@ -24,6 +24,7 @@
 //! ```
 
 use std::borrow::Cow;
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use modelgap_core::explain::estimate::MissingSignal;
@@ -41,7 +42,7 @@ use crate::file::write_model;
 use crate::graph::BondGraph;
 use crate::qual::Qual;
 use crate::simulate::{
-    Hold, Inputs, ParamChange, Run, SimOptions, Solver, simulate, simulate_compiled,
+    Drive, Hold, Inputs, ParamChange, Run, SimOptions, Solver, simulate, simulate_compiled,
 };
 
 /// Relative tolerance of the adaptive solvers in [`BondModel`]'s predictions.
@@ -95,6 +96,8 @@ pub struct BondModel {
     added: Vec<String>,
     /// How recorded inputs are held between samples.
     hold: Hold,
+    /// Inputs held otherwise than `hold` ([`BondModel::settle_holds`]).
+    input_holds: BTreeMap<String, Hold>,
     /// A fixed integration step (s) for a model the exact discretisation does
     /// not cover, chosen for one recording by [`Model::for_fitting`]; `None`:
     /// adaptive steps at [`RTOL`] and [`ATOL`].
@@ -110,6 +113,7 @@ impl BondModel {
             start: Start::Rest,
             added: Vec::new(),
             hold: Hold::Zero,
+            input_holds: BTreeMap::new(),
             fixed_step: None,
         }
     }
@@ -121,7 +125,50 @@ impl BondModel {
     #[must_use]
     pub fn with_hold(mut self, hold: Hold) -> BondModel {
         self.hold = hold;
+        self.input_holds.clear();
         self
+    }
+
+    /// The same model with the recorded input `input` held as `hold` (the others as
+    /// [`BondModel::hold`]).
+    #[must_use]
+    pub fn with_input_hold(mut self, input: &str, hold: Hold) -> BondModel {
+        self.input_holds.insert(input.to_owned(), hold);
+        self
+    }
+
+    /// Holds the recorded input `input` as `hold` from now on.
+    pub fn set_input_hold(&mut self, input: &str, hold: Hold) {
+        self.input_holds.insert(input.to_owned(), hold);
+    }
+
+    /// How the recorded input `input` is held between samples.
+    pub fn hold_of(&self, input: &str) -> Hold {
+        self.input_holds.get(input).copied().unwrap_or(self.hold)
+    }
+
+    /// The model's inputs that `rec` records, each held as [`BondModel::hold_of`] says.
+    pub fn recorded_inputs(&self, rec: &Recording) -> Inputs {
+        self.inputs_of(&self.graph, rec)
+    }
+
+    /// The inputs of `graph` (this model's, or an edit of it) that `rec` records, each
+    /// held as [`BondModel::hold_of`] says.
+    pub(crate) fn inputs_of(&self, graph: &BondGraph, rec: &Recording) -> Inputs {
+        let mut inputs = Inputs::new();
+        for name in graph.inputs().keys() {
+            if let Some(s) = rec.signal(name) {
+                inputs.set(
+                    name,
+                    Drive::Sampled {
+                        t: rec.t().to_vec(),
+                        values: s.values.clone(),
+                        hold: self.hold_of(name),
+                    },
+                );
+            }
+        }
+        inputs
     }
 
     /// The same model with predictions starting at `start`.
@@ -141,7 +188,8 @@ impl BondModel {
         &self.changes
     }
 
-    /// How the recording's inputs are held between samples.
+    /// How the recording's inputs are held between samples (unless
+    /// [`BondModel::hold_of`] says otherwise for one of them).
     pub fn hold(&self) -> Hold {
         self.hold
     }
@@ -198,8 +246,7 @@ impl BondModel {
             (Cow::Owned(g), ch)
         };
         let model = CompiledModel::new(&graph)?;
-        let input_names: Vec<String> = graph.inputs().keys().cloned().collect();
-        let inputs = Inputs::from_recording_with(rec, &input_names, self.hold);
+        let inputs = self.inputs_of(&graph, rec);
         let initial_state = match self.start {
             Start::Rest => None,
             Start::SteadyState => {
@@ -448,8 +495,7 @@ impl Model for BondModel {
             return None;
         }
         let model = CompiledModel::new(&self.graph).ok()?;
-        let input_names: Vec<String> = self.graph.inputs().keys().cloned().collect();
-        let inputs = Inputs::from_recording_with(rec, &input_names, self.hold);
+        let inputs = self.recorded_inputs(rec);
         let initial_state = match self.start {
             Start::Rest => None,
             Start::SteadyState => Some(steady_start(&self.graph, &model, rec, None).ok()?),
@@ -642,6 +688,7 @@ impl Model for BondModel {
             start: self.start,
             added,
             hold: self.hold,
+            input_holds: self.input_holds.clone(),
             fixed_step: self.fixed_step,
         }))
     }

@@ -875,7 +875,7 @@ def load_model(
     *,
     set: Optional[dict[str, float]] = None,
     steady_start: bool = False,
-    hold: str = "zoh",
+    hold: str = "auto",
 ) -> Union[BondModel, ClothModel]:
     """Loads a model by file or built-in name, as the command line does.
 
@@ -889,7 +889,9 @@ def load_model(
             parameter's unit (SI).
         steady_start: Bond graphs: start predictions at the steady state under the
             recording's first input values instead of at rest.
-        hold: Bond graphs: how recorded inputs are held between samples, ``"zoh"`` (zero
+        hold: Bond graphs: how recorded inputs are held between samples: ``"auto"`` (each
+            input that steps held at its samples' values, any other the way the model
+            predicts the recording better; see ``BondModel.hold_notes``), ``"zoh"`` (zero
             order) or ``"linear"``.
 
     Returns:
@@ -1162,14 +1164,30 @@ class BondModel:
         """The same model with recorded inputs held another way between samples.
 
         Args:
-            hold: ``"zoh"`` (also ``"zero"``; zero-order hold, for commanded inputs) or
-                ``"linear"`` (for sampled analog inputs).
+            hold: ``"auto"`` (each input that steps held at its samples' values, any other
+                the way the model predicts each recording better), ``"zoh"`` (also
+                ``"zero"``; zero-order hold, for commanded inputs) or ``"linear"`` (for
+                sampled analog inputs).
 
         Returns:
             A new model.
 
         Raises:
             DataError: For another ``hold``.
+        """
+
+    def hold_notes(self, rec: Recording) -> list[str]:
+        """How the hold ``"auto"`` holds each input ``rec`` records, and why.
+
+        Args:
+            rec: A recording of the model's inputs and outputs.
+
+        Returns:
+            One sentence per recorded input that is not constant (the notes ``modelgap
+            explain`` prints); empty when the model's hold is given.
+
+        Raises:
+            ModelError: When the model cannot be built.
         """
 
     def with_effects(self, effects: list[Effect]) -> BondModel:
@@ -1221,7 +1239,7 @@ class BondModel:
 
     @property
     def hold(self) -> str:
-        """How recorded inputs are held: ``"zoh"`` or ``"linear"``."""
+        """How recorded inputs are held: ``"auto"``, ``"zoh"`` or ``"linear"``."""
 
     @property
     def params(self) -> dict[str, float]:

@@ -14,6 +14,7 @@
 //! | sign magnitude | `|tanh(v/ε)|`, ε scanned (with a sign term: Coulomb friction that differs by direction) | flows |
 //! | quadratic drag | `v·|v|` | flows, positions, displacements |
 //! | cubic | `v³` | flows, positions, displacements |
+//! | hinge | `max(x − x₀, 0)` or `min(x − x₀, 0)`, x₀ scanned over the signal's 5–95 % quantiles | positions, displacements |
 //! | square root | `√max(e, 0)` | node efforts (an orifice) |
 //! | power | `sign(e)·|e|^p`, p scanned over 0.3 … 3 | node efforts (seepage, convection) |
 //! | harmonics | `sin nθ`, `cos nθ`, every n in 1..=24 at once | angles |
@@ -79,6 +80,10 @@ pub enum Family {
     QuadraticDrag,
     /// `v³`: a hardening (or softening) spring, a cubic damper.
     Cubic,
+    /// `max(x − x₀, 0)` or `min(x − x₀, 0)`, `x₀` scanned: a stop or a second
+    /// spring that engages past a point (a bilinear spring, a bump stop, a gap
+    /// that closes).
+    Hinge,
     /// `√e`: a free outflow through an orifice.
     SquareRoot,
     /// `sign(e)|e|^p`, `p` scanned: seepage, convection, a mixed outflow.
@@ -125,6 +130,9 @@ impl Family {
             }
             Family::QuadraticDrag => "a quadratic drag (fan, air, turbulence)",
             Family::Cubic => "a cubic term (hardening spring, cubic damping)",
+            Family::Hinge => {
+                "a term that starts at one position (a stop, a bilinear spring, a gap that closes)"
+            }
             Family::SquareRoot => "a square-root outflow (an orifice)",
             Family::Power => "a power law (seepage, convection, a mixed outflow)",
             Family::Harmonic => "a ripple locked to the angle",
@@ -985,11 +993,13 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
                 out.push(linear("lin"));
                 out.push(cubic());
                 out.push(quadratic("quad"));
+                out.extend(hinges(a, &v, eu));
             }
             SignalRole::Position => {
                 out.push(linear("lin"));
                 out.push(cubic());
                 out.push(quadratic("quad"));
+                out.extend(hinges(a, &v, eu));
                 let y: Vec<f64> = idx.iter().map(|&k| m.value[k]).collect();
                 out.extend(ripples(&y, a, &v, eu));
             }
@@ -1138,6 +1148,66 @@ fn library(m: &MissingSignal, idx: &[usize]) -> Vec<Block> {
                     t.iter().map(|&x| (x - ts).max(0.0)).collect(),
                 ));
             }
+        }
+    }
+    out
+}
+
+/// Where a hinge may start, per side: this many points from the 5 % to the 95 % quantile
+/// of the signal.
+const HINGE_SCAN: usize = 15;
+
+/// The hinge family on a position or displacement `x` (values `v`): `max(x − x₀, 0)` and
+/// `min(x − x₀, 0)` with `x₀` scanned over [`HINGE_SCAN`] quantiles — a stop, a bump
+/// stop or a second spring that engages past `x₀` (a spring stiffer one way than the
+/// other: `x₀` = 0), a gap that closes. `x₀` is a shape parameter within the signal's
+/// range.
+fn hinges(a: &ActingSignal, v: &[f64], eu: &str) -> Vec<Block> {
+    let mut sorted: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    if sorted.len() < 2 * HINGE_SCAN {
+        return Vec::new();
+    }
+    sorted.sort_by(f64::total_cmp);
+    let quantile = |q: f64| sorted[((sorted.len() - 1) as f64 * q).round() as usize];
+    let (lo, hi) = (sorted[0], sorted[sorted.len() - 1]);
+    if hi <= lo {
+        return Vec::new();
+    }
+    let (n, u) = (&a.name, &a.unit);
+    let mut out = Vec::new();
+    for i in 0..HINGE_SCAN {
+        let x0 = quantile(0.05 + 0.9 * i as f64 / (HINGE_SCAN - 1) as f64);
+        for (param, f, upper) in [("c_above", "max", true), ("c_below", "min", false)] {
+            out.push(Block {
+                family: Family::Hinge,
+                member: n.clone(),
+                scanned: 2 * HINGE_SCAN,
+                terms: vec![shaped(
+                    term(
+                        param,
+                        Family::Hinge,
+                        format!("{f}({} − §, 0)", a.label),
+                        format!("{f}({n} - §, 0)"),
+                        per(eu, u),
+                    ),
+                    "x0",
+                    u,
+                    x0,
+                    lo,
+                    hi,
+                )],
+                columns: vec![
+                    v.iter()
+                        .map(|&x| {
+                            if upper {
+                                (x - x0).max(0.0)
+                            } else {
+                                (x - x0).min(0.0)
+                            }
+                        })
+                        .collect(),
+                ],
+            });
         }
     }
     out
