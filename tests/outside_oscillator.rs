@@ -182,6 +182,32 @@ fn a_spring_stiffer_one_way_is_found_as_a_hinge() {
     );
 }
 
+/// A stop that the mass meets at 2 cm, 5000 N/m (the spring's 800 beside it): the hinge
+/// `max(x − x₀, 0)` with both within 1 %, alone, at the floor. Before the confirming fit
+/// went on past its first ten steps on the model as given, it ended at 5394 N/m and
+/// 2.054 cm (2.3 times the floor), and a pair search carried the rest beside a "damper
+/// that is off" by 0.009 %.
+#[test]
+fn a_stop_met_at_two_centimetres_is_found_with_its_place_and_stiffness() {
+    let rec = record(Some(|x, _| -5000.0 * (x - 0.02).max(0.0)), 4);
+    let (model, _) = settled(&rec);
+    let ex = explained(&model, &rec, "bump stop");
+    let (ids, params, text) = chosen(&ex);
+    assert_eq!(ex.verdict, Verdict::EffectFound, "{text}");
+    assert_eq!(ids.len(), 1, "{text}");
+    let stiffness = value(&params, "c_above", &text);
+    assert!(
+        (stiffness - 5000.0).abs() < 0.01 * 5000.0,
+        "{stiffness}:\n{text}"
+    );
+    let x0 = value(&params, "x0_above", &text);
+    assert!((x0 - 0.02).abs() < 0.01 * 0.02, "{x0}:\n{text}");
+    assert!(
+        ex.outputs[0].rms_after < 1.3 * ex.outputs[0].noise_floor,
+        "{text}"
+    );
+}
+
 /// A commanded input that steps is held at each sample's value without a run of the
 /// model, and the command line says nothing of it.
 #[test]

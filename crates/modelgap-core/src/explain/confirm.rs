@@ -22,6 +22,14 @@ const NOMINAL_TOLERANCE: f64 = 1e-4;
 /// as given, when the two disagree at its end ([`checked_on_the_model_as_given`]).
 const CHECK_ITERATIONS: usize = 10;
 
+/// Rounds of [`CHECK_ITERATIONS`] steps on the model as given: another round runs while
+/// the last one ended at its step limit and still lowered the cost by a unit of evidence.
+/// A law with a kink sharper than the fixed step resolves (a bump stop's contact) is fitted
+/// biased on the model for fitting; one round left a stop of 5000 N/m at 5394 N/m, 2.3
+/// times the floor, and a pair search then carried the rest beside a "damper that is off"
+/// by 0.009 %.
+const CHECK_ROUNDS: usize = 5;
+
 /// A fit of one candidate on top of fixed effects; `fixed[i]` pins parameter i.
 #[derive(Clone)]
 pub(super) struct CandidateProblem<'a> {
@@ -275,19 +283,27 @@ fn checked_on_the_model_as_given(
             max_iterations: CHECK_ITERATIONS,
             ..fit_opts.clone()
         };
-        let start = report.params.clone();
-        let mut polished = fit(
-            accurate,
-            &start,
-            bounds,
-            scales,
-            &again,
-            opts.cancel.as_deref(),
-        )?;
-        polished.iterations += report.iterations;
-        polished.evaluations += report.evaluations;
-        polished.cost_before = report.cost_before;
-        report = polished;
+        for _ in 0..CHECK_ROUNDS {
+            let start = report.params.clone();
+            let mut polished = fit(
+                accurate,
+                &start,
+                bounds,
+                scales,
+                &again,
+                opts.cancel.as_deref(),
+            )?;
+            let (before, after) = (polished.cost_before, polished.cost_after);
+            polished.iterations += report.iterations;
+            polished.evaluations += report.evaluations;
+            polished.cost_before = report.cost_before;
+            report = polished;
+            let more = report.termination == crate::fit::Termination::MaxIterations
+                && (before - after) * n > after;
+            if !more {
+                break;
+            }
+        }
         accurate.residuals(&report.params, &mut weighted)?;
     } else {
         report.cost_after = cost;
