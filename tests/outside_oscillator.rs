@@ -110,14 +110,14 @@ fn explained(model: &BondModel, rec: &Recording, name: &str) -> Explanation {
 }
 
 /// The control: the recorded force is smooth, and the model predicts the position ten
-/// times better with it held linearly, so it is; nothing is missing. Held at each
+/// times better with it held between samples (by a cubic), so it is; nothing is missing. Held at each
 /// sample's value instead (the default before), the same model leaves more than twice
 /// the noise.
 #[test]
-fn a_sampled_analog_force_is_held_linearly_and_the_control_is_clean() {
+fn a_sampled_analog_force_is_held_between_samples_and_the_control_is_clean() {
     let rec = record(None, 1);
     let (model, notes) = settled(&rec);
-    assert_eq!(model.hold_of("F"), Hold::Linear, "{notes:?}");
+    assert_eq!(model.hold_of("F"), Hold::Cubic, "{notes:?}");
     assert!(notes[0].contains("clearly better"), "{notes:?}");
     let ex = explained(&model, &rec, "control");
     let text = modelgap::story::explanation_text(&ex, 6);
@@ -135,13 +135,13 @@ fn a_sampled_analog_force_is_held_linearly_and_the_control_is_clean() {
 
 /// A quadratic damper `15 v|v|` beside the linear one: the model's own error (18 % of
 /// the position's variance) is larger than what the hold changes, so the force's smooth
-/// shape decides it (linear), and the drag is named within 5 % at the floor.
+/// shape decides it (a cubic), and the drag is named within 5 % at the floor.
 #[test]
-fn with_a_large_model_error_a_smooth_force_is_still_held_linearly() {
+fn with_a_large_model_error_a_smooth_force_is_still_held_between_samples() {
     let rec = record(Some(|_, v| -15.0 * v * v.abs()), 2);
     let (model, notes) = settled(&rec);
     let held = model.clone().settle_holds(&rec);
-    assert_eq!(model.hold_of("F"), Hold::Linear, "{notes:?}");
+    assert_eq!(model.hold_of("F"), Hold::Cubic, "{notes:?}");
     assert!(
         matches!(held[0].reason, HoldReason::Fits { roughness, .. } if roughness < 0.5),
         "{held:?}"

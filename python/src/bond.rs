@@ -79,6 +79,7 @@ fn hold_name(h: Hold) -> &'static str {
     match h {
         Hold::Zero => "zoh",
         Hold::Linear => "linear",
+        Hold::Cubic => "cubic",
     }
 }
 
@@ -93,8 +94,9 @@ pub fn parse_model_hold(s: &str) -> PyResult<Option<Hold>> {
         "auto" => Ok(None),
         "zoh" | "zero" => Ok(Some(Hold::Zero)),
         "linear" => Ok(Some(Hold::Linear)),
+        "cubic" => Ok(Some(Hold::Cubic)),
         _ => Err(data_error(format!(
-            "hold must be \"auto\", \"zoh\" or \"linear\", found \"{s}\""
+            "hold must be \"auto\", \"zoh\", \"linear\" or \"cubic\", found \"{s}\""
         ))),
     }
 }
@@ -103,8 +105,9 @@ fn parse_hold(s: &str) -> PyResult<Hold> {
     match s {
         "zoh" | "zero" => Ok(Hold::Zero),
         "linear" => Ok(Hold::Linear),
+        "cubic" => Ok(Hold::Cubic),
         _ => Err(data_error(format!(
-            "hold must be \"zoh\" or \"linear\", found \"{s}\""
+            "hold must be \"zoh\", \"linear\" or \"cubic\", found \"{s}\""
         ))),
     }
 }

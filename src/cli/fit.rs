@@ -44,7 +44,8 @@ pub struct FitArgs {
 
     /// How recorded inputs are held between samples: auto (each input that steps held at its
     /// samples' values, any other the way the model predicts the recording better), zoh (a
-    /// commanded input) or linear (a sampled analog input)
+    /// commanded input), linear (straight lines between samples) or cubic (a smooth cubic
+    /// through them: a sampled analog input)
     #[arg(long, value_enum, default_value_t = HoldArg::Auto)]
     pub hold: HoldArg,
 

@@ -52,8 +52,9 @@ pub struct LoopArgs {
 
     /// How recorded inputs are held between samples (bond graphs): auto (each input that
     /// steps held at its samples' values, any other the way the model predicts the recording
-    /// better; said in a note), zoh (a commanded input that changes at a sample and stays) or
-    /// linear (a sampled analog input)
+    /// better; said in a note), zoh (a commanded input that changes at a sample and stays),
+    /// linear (straight lines between samples) or cubic (a smooth cubic through them: a
+    /// sampled analog input)
     #[arg(long, value_enum, default_value_t = HoldArg::Auto)]
     pub hold: HoldArg,
 
@@ -96,6 +97,8 @@ pub enum HoldArg {
     Zoh,
     /// Straight lines between samples
     Linear,
+    /// A smooth cubic through the samples (a sampled analog input)
+    Cubic,
 }
 
 impl From<HoldArg> for Option<Hold> {
@@ -104,6 +107,7 @@ impl From<HoldArg> for Option<Hold> {
             HoldArg::Auto => None,
             HoldArg::Zoh => Some(Hold::Zero),
             HoldArg::Linear => Some(Hold::Linear),
+            HoldArg::Cubic => Some(Hold::Cubic),
         }
     }
 }
@@ -115,6 +119,7 @@ impl HoldArg {
             HoldArg::Auto => "",
             HoldArg::Zoh => " --hold zoh",
             HoldArg::Linear => " --hold linear",
+            HoldArg::Cubic => " --hold cubic",
         }
     }
 }

@@ -100,6 +100,8 @@ enum HoldArg {
     Linear,
     /// Each sample's value until the next sample (zero-order hold)
     Zoh,
+    /// A smooth cubic through the samples (Catmull–Rom)
+    Cubic,
 }
 
 impl From<HoldArg> for Hold {
@@ -107,6 +109,7 @@ impl From<HoldArg> for Hold {
         match h {
             HoldArg::Linear => Hold::Linear,
             HoldArg::Zoh => Hold::Zero,
+            HoldArg::Cubic => Hold::Cubic,
         }
     }
 }

@@ -115,7 +115,9 @@ fn places(g: &BondGraph) -> Vec<Place> {
                     flow_word,
                 });
             }
-            ElementKind::Zero => {
+            // A 0-junction with a C, or a C alone on a 1-junction (a capacitor in a
+            // series loop: what leaks across it has nowhere else to act).
+            ElementKind::Zero | ElementKind::C => {
                 if let Some(node) = Node::of(g, id) {
                     let (e, f) = node.units();
                     let known = |u: &str| {
@@ -277,7 +279,12 @@ fn augmented(
         Quantity::Effort => Element::se("missing_source", UNKNOWN),
         Quantity::Flow => Element::sf("missing_source", UNKNOWN),
     };
-    attach(&mut g, p.id, source).ok()?;
+    // A C alone on a 1-junction: its node's junction, put between them.
+    let at = match g.element(p.id).kind {
+        ElementKind::C => Node::of(&g, p.id)?.junction(&mut g).ok()?,
+        _ => p.id,
+    };
+    attach(&mut g, at, source).ok()?;
     let mut acting = Vec::new();
     let mut add =
         |g: &mut BondGraph, measured: Measured, label: String, unit: String, law: String, role| {

@@ -23,7 +23,7 @@ use nalgebra::DMatrix;
 use crate::compiled::CompiledModel;
 use crate::error::{BondError, Result};
 use crate::ode::OdeStats;
-use crate::simulate::{Drive, Hold};
+use crate::simulate::{CUBIC_PIECES, Drive, Hold};
 
 /// `ẋ = A x + B u + c`, `y = C x + D u + e`, read off the tape with unit
 /// vectors (exact, since the tape is affine). For a state-affine model that
@@ -274,6 +274,25 @@ pub fn integrate(
                 ..
             } => {
                 extra.extend(t.iter().copied().filter(|&x| x > t0 && x < t_end));
+                linear[j] = true;
+            }
+            // A cubic followed by straight lines over quarters of each interval.
+            Drive::Sampled {
+                t,
+                hold: Hold::Cubic,
+                ..
+            } => {
+                for w in t.windows(2) {
+                    let step = (w[1] - w[0]) / CUBIC_PIECES as f64;
+                    extra.extend(
+                        (0..CUBIC_PIECES)
+                            .map(|k| w[0] + k as f64 * step)
+                            .filter(|&x| x > t0 && x < t_end),
+                    );
+                }
+                if let Some(&last) = t.last().filter(|&&x| x > t0 && x < t_end) {
+                    extra.push(last);
+                }
                 linear[j] = true;
             }
             Drive::Sampled {

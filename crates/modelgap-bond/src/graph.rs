@@ -193,6 +193,39 @@ impl BondGraph {
         Ok(BondId(self.bonds.len() as u32 - 1))
     }
 
+    /// Puts `element` (a junction) into `bond`, on the side of `end`: the bond now ends
+    /// at the new element, and a new bond joins it to `end`, with power flowing the same
+    /// way. A 0- or 1-junction with two bonds changes nothing, and effects can then attach
+    /// to it (a leakage across a capacitor that sat on a 1-junction).
+    ///
+    /// # Errors
+    /// As [`BondGraph::add`]; [`BondError::BadPorts`] when `end` is not an end of `bond`.
+    pub fn split_bond(
+        &mut self,
+        bond: BondId,
+        end: ElementId,
+        element: Element,
+    ) -> Result<ElementId> {
+        let b = self.bonds[bond.index()];
+        if b.from != end && b.to != end {
+            let e = &self.elements[end.0 as usize];
+            return Err(BondError::BadPorts {
+                element: e.name.clone(),
+                kind: e.kind.to_string(),
+                detail: format!("is not an end of bond {}", bond.number()),
+            });
+        }
+        let id = self.add(element)?;
+        if b.to == end {
+            self.bonds[bond.index()].to = id;
+            self.bond(id, end)?;
+        } else {
+            self.bonds[bond.index()].from = id;
+            self.bond(end, id)?;
+        }
+        Ok(id)
+    }
+
     /// Adds a bond between two elements given by name.
     ///
     /// # Errors

@@ -4,7 +4,8 @@
 //! output through its converter, a PWM duty, a set point) keeps its value until the
 //! next sample: zero-order hold. A sampled analog signal (a force from a load cell, a
 //! shaker's multisine, a voltage behind a reconstruction filter) moves between its
-//! samples, and straight lines follow it: linear hold. Held the wrong way, the input
+//! samples, and a smooth curve through them follows it: a cubic hold (straight lines,
+//! the linear hold, miss its curvature, [`Hold::Cubic`]). Held the wrong way, the input
 //! is shifted by half a sample interval. On a mass on a spring pushed by a multisine
 //! up to 20 Hz, recorded 10 s at 1 kHz with noise at 0.3 % of the motion, that shift
 //! alone left 3.5 times the noise, and explain named a mass 0.2 % off on a recording
@@ -15,13 +16,15 @@
 //! steps (it repeats its value at half its samples or more, or takes two values) is
 //! held at each sample's value. For any other one the samples alone cannot decide (a
 //! smooth multisine sent through a converter that holds it looks like a sampled analog
-//! signal), so the model is run with the input held each way: the way that predicts the
-//! measured outputs clearly better ([`CLEARLY`]) is kept. When neither is clearly
-//! better (the model's own error is larger than what the hold changes: a missing
-//! damping and a half-sample lag look alike) the samples' shape decides: a smooth
-//! input ([`SMOOTH`]) is held linearly, a rough one (it changes at every sample like a
-//! command updated at every sample) at each sample's value. The note says which reason
-//! decided.
+//! signal), so the model is run with the input held at each sample's value and held
+//! between samples — by a cubic when the input is smooth between its samples
+//! ([`SMOOTH`]), by straight lines when it is rough (a cubic through samples of a signal
+//! near half the sampling rate overshoots) — and the way that predicts the measured
+//! outputs clearly better ([`CLEARLY`]) is kept. When neither is clearly better (the
+//! model's own error is larger than what the hold changes: a missing damping and a
+//! half-sample lag look alike) the samples' shape decides: a smooth input is held between
+//! samples, a rough one (it changes at every sample like a command updated at every
+//! sample) at each sample's value. The note says which reason decided.
 
 use std::fmt;
 
@@ -58,8 +61,8 @@ pub enum HoldReason {
     Fits {
         /// Held at each sample's value.
         zero: f64,
-        /// Held linearly between samples.
-        linear: f64,
+        /// Held between samples (by a cubic or straight lines: see the chosen hold).
+        between: f64,
         /// RMS of the second differences over RMS of the first ([`SMOOTH`]).
         roughness: f64,
     },
@@ -82,6 +85,7 @@ fn hold_words(hold: Hold) -> &'static str {
     match hold {
         Hold::Zero => "held at each sample's value until the next (zero-order hold)",
         Hold::Linear => "held linearly between samples",
+        Hold::Cubic => "held by a smooth cubic through its samples",
     }
 }
 
@@ -96,18 +100,22 @@ impl fmt::Display for HeldInput {
             ),
             HoldReason::Fits {
                 zero,
-                linear,
+                between,
                 roughness,
             } => {
                 let (chosen, other) = match self.hold {
-                    Hold::Zero => (*zero, *linear),
-                    Hold::Linear => (*linear, *zero),
+                    Hold::Zero => (*zero, *between),
+                    Hold::Linear | Hold::Cubic => (*between, *zero),
+                };
+                let way = if *roughness < SMOOTH {
+                    "by a cubic"
+                } else {
+                    "linearly"
                 };
                 let errors = format!(
-                    "squared error {} of the outputs' variance held at each sample, {} \
-                     linearly",
+                    "squared error {} of the outputs' variance held at each sample, {} {way}",
                     sig(*zero),
-                    sig(*linear)
+                    sig(*between)
                 );
                 if chosen < CLEARLY * other {
                     write!(
@@ -193,9 +201,15 @@ impl BondModel {
                 });
                 continue;
             }
+            let roughness = roughness(values);
+            let smooth_hold = if roughness < SMOOTH {
+                Hold::Cubic
+            } else {
+                Hold::Linear
+            };
             let mut error = [0.0; 2];
             let mut failed = None;
-            for (k, hold) in [Hold::Zero, Hold::Linear].into_iter().enumerate() {
+            for (k, hold) in [Hold::Zero, smooth_hold].into_iter().enumerate() {
                 self.set_input_hold(&name, hold);
                 match self.relative_error(rec) {
                     Ok(Some(e)) => error[k] = e,
@@ -203,23 +217,22 @@ impl BondModel {
                     Err(e) => failed = Some(format!("the model could not run: {e}")),
                 }
             }
-            let [zero, linear] = error;
-            let roughness = roughness(values);
+            let [zero, between] = error;
             let (hold, reason) = match failed {
                 Some(why) => (self.hold(), HoldReason::Undecided(why)),
                 None => {
-                    let hold = if linear < CLEARLY * zero {
-                        Hold::Linear
-                    } else if zero < CLEARLY * linear {
+                    let hold = if between < CLEARLY * zero {
+                        smooth_hold
+                    } else if zero < CLEARLY * between {
                         Hold::Zero
                     } else if roughness < SMOOTH {
-                        Hold::Linear
+                        smooth_hold
                     } else {
                         Hold::Zero
                     };
                     let reason = HoldReason::Fits {
                         zero,
-                        linear,
+                        between,
                         roughness,
                     };
                     (hold, reason)

@@ -28,7 +28,19 @@ pub enum Hold {
     Linear,
     /// The last sample's value until the next sample.
     Zero,
+    /// A cubic through the samples (Catmull–Rom: each piece through its two samples,
+    /// with the slopes its neighbours give; straight lines at the first and last
+    /// interval): a sampled analog signal. Between samples a straight line misses a
+    /// tone's curvature: at a fiftieth of the sampling rate it drives a model 0.07 % too
+    /// weakly, and a series RLC loop read "R is off by 0.07 %"; the cubic misses 60 times
+    /// less. The exact discretisation follows it with straight lines over quarters of
+    /// each interval ([`CUBIC_PIECES`]), 15 times closer than over whole ones.
+    Cubic,
 }
+
+/// Straight pieces per sample interval the exact discretisation follows a cubic hold
+/// with.
+pub const CUBIC_PIECES: usize = 4;
 
 /// What drives one input signal.
 #[derive(Clone, Debug, PartialEq)]
@@ -149,12 +161,18 @@ impl Drive {
                     i += 1;
                 }
                 *cursor = i;
+                let w = (t - ts[i]) / (ts[i + 1] - ts[i]);
                 match hold {
                     Hold::Zero => values[i],
-                    Hold::Linear => {
-                        let w = (t - ts[i]) / (ts[i + 1] - ts[i]);
-                        values[i] + w * (values[i + 1] - values[i])
+                    Hold::Cubic if i >= 1 && i + 2 < n => {
+                        let (p0, p1, p2, p3) =
+                            (values[i - 1], values[i], values[i + 1], values[i + 2]);
+                        0.5 * (2.0 * p1
+                            + w * ((p2 - p0)
+                                + w * ((2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3)
+                                    + w * (3.0 * (p1 - p2) + p3 - p0))))
                     }
+                    Hold::Linear | Hold::Cubic => values[i] + w * (values[i + 1] - values[i]),
                 }
             }
             Drive::Pwm {
@@ -204,7 +222,8 @@ impl Drive {
                 }
             }
             Drive::Sampled {
-                hold: Hold::Linear, ..
+                hold: Hold::Linear | Hold::Cubic,
+                ..
             } => {}
             Drive::Pwm {
                 frequency_hz, duty, ..

@@ -892,7 +892,7 @@ def load_model(
         hold: Bond graphs: how recorded inputs are held between samples: ``"auto"`` (each
             input that steps held at its samples' values, any other the way the model
             predicts the recording better; see ``BondModel.hold_notes``), ``"zoh"`` (zero
-            order) or ``"linear"``.
+            order), ``"linear"`` or ``"cubic"`` (a smooth cubic through the samples).
 
     Returns:
         A ``BondModel`` or a ``ClothModel``.
@@ -1166,7 +1166,8 @@ class BondModel:
         Args:
             hold: ``"auto"`` (each input that steps held at its samples' values, any other
                 the way the model predicts each recording better), ``"zoh"`` (also
-                ``"zero"``; zero-order hold, for commanded inputs) or ``"linear"`` (for
+                ``"zero"``; zero-order hold, for commanded inputs), ``"linear"`` (straight
+                lines between samples) or ``"cubic"`` (a smooth cubic through them, for
                 sampled analog inputs).
 
         Returns:
@@ -1239,7 +1240,7 @@ class BondModel:
 
     @property
     def hold(self) -> str:
-        """How recorded inputs are held: ``"auto"``, ``"zoh"`` or ``"linear"``."""
+        """How recorded inputs are held: ``"auto"``, ``"zoh"``, ``"linear"`` or ``"cubic"``."""
 
     @property
     def params(self) -> dict[str, float]:
@@ -1347,8 +1348,9 @@ class BondModel:
                 takes ``new_value`` (its unit) from ``at_s`` (s) on.
             steady_start: Start at the steady state under the inputs' starting values instead
                 of at rest.
-            hold: How ``(t, values)`` drives are held between samples: ``"linear"`` or
-                ``"zoh"`` (also ``"zero"``). The model's own ``hold`` is not used here.
+            hold: How ``(t, values)`` drives are held between samples: ``"linear"``,
+                ``"zoh"`` (also ``"zero"``) or ``"cubic"``. The model's own ``hold`` is not
+                used here.
             states: Record the state variables too.
 
         Returns:

@@ -43,7 +43,7 @@ fn fresh_param(g: &BondGraph, base: &str) -> String {
 }
 
 /// `base` if no element has it, else `base_2`, `base_3`, ….
-fn fresh_element(g: &BondGraph, base: &str) -> String {
+pub(super) fn fresh_element(g: &BondGraph, base: &str) -> String {
     if g.find(base).is_none() {
         return base.to_string();
     }

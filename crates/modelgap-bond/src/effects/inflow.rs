@@ -63,7 +63,8 @@ impl EffectDef for Inflow {
             .described("a constant flow into the node (its bond points out of the node)");
         source.law = Law::Source(value);
         debug_assert_eq!(source.kind, ElementKind::Sf);
-        attach(g, self.node.id, source)?;
+        let at = self.node.junction(g)?;
+        attach(g, at, source)?;
         Ok(Vec::new())
     }
 

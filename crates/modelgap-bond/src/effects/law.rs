@@ -39,7 +39,13 @@ impl LawEffect {
     pub fn read(g: &BondGraph, target: &str) -> Option<LawEffect> {
         let (place, formula) = target.split_once(':')?;
         let id = g.find(place)?;
-        matches!(g.element(id).kind, ElementKind::One | ElementKind::Zero).then(|| LawEffect {
+        // A C is a place when it is a node of its own (alone on a 1-junction).
+        let place = match g.element(id).kind {
+            ElementKind::One | ElementKind::Zero => true,
+            ElementKind::C => super::Node::of(g, id).is_some(),
+            _ => false,
+        };
+        place.then(|| LawEffect {
             place: id,
             formula: formula.to_string(),
         })
@@ -174,7 +180,18 @@ impl EffectDef for LawEffect {
             },
             _ => None,
         });
-        let is_flow = g.element(self.place).kind == ElementKind::Zero;
+        // A flow on a node: a 0-junction, or a C alone on a 1-junction (its node's junction
+        // is put between them).
+        let is_flow = matches!(
+            g.element(self.place).kind,
+            ElementKind::Zero | ElementKind::C
+        );
+        let at = match g.element(self.place).kind {
+            ElementKind::C => super::Node::of(g, self.place)
+                .ok_or_else(|| bad(c, "", "the capacitance is no node".to_string()))?
+                .junction(g)?,
+            _ => self.place,
+        };
         let mut source = if is_flow {
             Element::sf(&format!("law_{suffix}"), "0")
         } else {
@@ -188,7 +205,7 @@ impl EffectDef for LawEffect {
         };
         attach(
             g,
-            self.place,
+            at,
             source.described(&format!(
                 "discovered law: the missing {} (its bond points into it) {}",
                 what.word(),

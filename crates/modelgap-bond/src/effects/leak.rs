@@ -62,9 +62,10 @@ impl EffectDef for Leak {
             &format!("loss from the node per unit of its effort {}", added(c)),
         )?;
         let flow = law(c, &format!("{gain} * e"))?;
+        let at = self.node.junction(g)?;
         attach(
             g,
-            self.node.id,
+            at,
             Element::nonlinear(&format!("leak_{suffix}"), ElementKind::R, None, Some(flow))
                 .described("a linear loss from the node"),
         )?;

@@ -13,7 +13,7 @@ use super::{
     SensorClip, SensorDelay, SensorDrift, SensorLag, SensorOffset, SensorScale, Stiffness, Store,
     Viscous,
 };
-use crate::element::Law;
+use crate::element::{ElementKind, Law};
 use crate::expr::Expr;
 use crate::graph::{BondGraph, ElementId};
 
@@ -204,6 +204,10 @@ pub(super) fn linear_element_words(g: &BondGraph, id: ElementId) -> String {
 /// "the shaft (1m)" from a junction's description, or "junction 1m".
 pub(crate) fn place(g: &BondGraph, j: ElementId) -> String {
     let el = g.element(j);
+    // A C alone on a 1-junction is a node of its own (`Node::of`): named as an element.
+    if el.kind == ElementKind::C {
+        return element_place(g, j);
+    }
     let h = head(&el.description);
     if h.is_empty() {
         format!("junction {}", el.name)

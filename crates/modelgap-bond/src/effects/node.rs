@@ -1,6 +1,13 @@
 //! Where storage-node effects attach: 0-junctions with a C bonded to them —
 //! a tank's level, a thermal mass's temperature, a capacitor's voltage, a
 //! pressure node. Any domain; the words follow the C's unit when it has one.
+//!
+//! A capacitor, a thermal mass or a tank whose C a model bonds straight to a
+//! 1-junction (a series RLC loop) is a node too: what leaks across it or flows
+//! into it has nowhere else to act. Its node is the C itself until an effect
+//! attaches there; the edit then puts a 0-junction between the C and its
+//! 1-junction ([`Node::junction`]), which changes nothing else. A spring (a C
+//! whose unit names no node kind) is left as it is.
 
 use modelgap_core::{Candidate, EffectParam};
 
@@ -136,12 +143,61 @@ pub struct Node {
 impl Node {
     /// The node `id`, when it is a 0-junction with a C bonded to it.
     pub fn of(g: &BondGraph, id: ElementId) -> Option<Node> {
-        if g.element(id).kind != ElementKind::Zero {
-            return None;
+        match g.element(id).kind {
+            ElementKind::Zero => {
+                let c = (g.ports(id).into_iter())
+                    .map(|(b, _)| g.other_end(b, id))
+                    .find(|&o| g.element(o).kind == ElementKind::C)?;
+                Node::with_storage(g, id, c)
+            }
+            // A C alone on a 1-junction, whose unit says what it stores.
+            ElementKind::C => {
+                let ports = g.ports(id);
+                let [(b, _)] = ports.as_slice() else {
+                    return None;
+                };
+                if g.element(g.other_end(*b, id)).kind != ElementKind::One {
+                    return None;
+                }
+                let node = Node::with_storage(g, id, id)?;
+                (node.kind != NodeKind::Generic && node.units_known).then_some(node)
+            }
+            _ => None,
         }
-        let c = (g.ports(id).into_iter())
-            .map(|(b, _)| g.other_end(b, id))
-            .find(|&o| g.element(o).kind == ElementKind::C)?;
+    }
+
+    /// The 0-junction where this node's effects attach: the node's own, or for a C on a
+    /// 1-junction one put between them now (or by an earlier edit).
+    ///
+    /// # Errors
+    /// When the junction cannot be added (its name taken).
+    pub fn junction(self, g: &mut BondGraph) -> crate::error::Result<ElementId> {
+        if g.element(self.id).kind != ElementKind::C {
+            return Ok(self.id);
+        }
+        let ports = g.ports(self.id);
+        let Some(&(bond, _)) = ports.first() else {
+            return Ok(self.id);
+        };
+        let other = g.other_end(bond, self.id);
+        if g.element(other).kind == ElementKind::Zero {
+            return Ok(other);
+        }
+        let name = g.element(self.id).name.clone();
+        let what = match self.kind {
+            NodeKind::Electrical => "the voltage across",
+            NodeKind::Thermal => "the temperature of",
+            NodeKind::Hydraulic => "the level or pressure of",
+            NodeKind::Generic => "the effort of",
+        };
+        let junction =
+            crate::element::Element::zero(&super::edit::fresh_element(g, &format!("0_{name}")))
+                .described(&format!("{what} {name}"));
+        g.split_bond(bond, self.id, junction)
+    }
+
+    /// The node at `id` (a 0-junction, or a C on a 1-junction) whose storage is `c`.
+    fn with_storage(g: &BondGraph, id: ElementId, c: ElementId) -> Option<Node> {
         // The unit of a parameter of the C's law: its capacity, linear (`parameter = "C"`) or
         // written out (`effort = "q / Cth"`, Cth in J/K). One that names a kind of node
         // first, else the first with a unit.
@@ -211,7 +267,8 @@ impl Node {
         ident(self.name(g))
     }
 
-    /// "tank 1 (top)" from the junction's description, or "junction top".
+    /// "tank 1 (top)" from the junction's description, or "junction top"; a C on a
+    /// 1-junction by its own description, or "element C" ([`place`]).
     pub(super) fn place(self, g: &BondGraph) -> String {
         place(g, self.id)
     }
@@ -320,5 +377,89 @@ unit = "K"
         let tank = read_model(&src.replace("\"thermal\"", "\"hydraulic\"")).unwrap();
         let err = crate::effects::apply(&tank, power, &[1e-3, 2.0]).unwrap_err();
         assert!(err.to_string().contains("not a thermal node"), "{err}");
+    }
+}
+
+#[cfg(test)]
+mod loop_capacitor {
+    use super::*;
+    use crate::file::read_model;
+    use crate::simulate::{Drive, Inputs, SimOptions, simulate, time_grid};
+
+    const RLC: &str = r#"
+name = "rlc"
+[parameters]
+L = { value = 0.01, unit = "H" }
+R = { value = 5.0, unit = "Ohm" }
+C = { value = 1e-4, unit = "F" }
+[inputs]
+V = { default = 0.0, unit = "V" }
+[[elements]]
+name = "V"
+kind = "Se"
+effort = "V"
+[[elements]]
+name = "1i"
+kind = "1"
+[[elements]]
+name = "L"
+kind = "I"
+parameter = "L"
+[[elements]]
+name = "R"
+kind = "R"
+parameter = "R"
+[[elements]]
+name = "C"
+kind = "C"
+parameter = "C"
+[[bonds]]
+from = "V"
+to = "1i"
+[[bonds]]
+from = "1i"
+to = "L"
+[[bonds]]
+from = "1i"
+to = "R"
+[[bonds]]
+from = "1i"
+to = "C"
+[[outputs]]
+name = "vc"
+value = "C.q / C"
+unit = "V"
+"#;
+
+    /// A capacitor alone on a series loop is an electrical node, its effort's scale is its
+    /// voltage over the run, and the edit puts a 0-junction between it and the loop.
+    #[test]
+    fn a_capacitor_on_a_loop_is_a_node_with_its_voltage_as_scale() {
+        let g = read_model(RLC).unwrap();
+        let c = g.find("C").unwrap();
+        let node = Node::of(&g, c).unwrap();
+        assert_eq!((node.kind, node.units_known), (NodeKind::Electrical, true));
+        let run = simulate(
+            &g,
+            &Inputs::new().with("V", Drive::Constant(5.0)),
+            &time_grid(0.1, 1e4),
+            &SimOptions::default(),
+        )
+        .unwrap();
+        let scales = Scales::of_run(&g, &run);
+        let peak = node.effort_peak(&scales);
+        assert!(peak > 4.0 && peak < 10.0, "{peak}");
+        let mut edited = g.clone();
+        let j = node.junction(&mut edited).unwrap();
+        assert_eq!(edited.element(j).kind, ElementKind::Zero);
+        assert_eq!(node.junction(&mut edited).unwrap(), j, "once");
+        assert!(Node::of(&edited, j).is_some() && Node::of(&edited, c).is_none());
+        // A spring (N/m) on a 1-junction is no node.
+        let spring = RLC.replace(
+            r#"C = { value = 1e-4, unit = "F" }"#,
+            r#"C = { value = 1e-4, unit = "m/N" }"#,
+        );
+        let g = read_model(&spring).unwrap();
+        assert!(Node::of(&g, g.find("C").unwrap()).is_none());
     }
 }

@@ -79,9 +79,10 @@ impl EffectDef for Orifice {
             ),
         )?;
         let flow = law(c, &format!("{gain} * sign(e) * sqrt(abs(e))"))?;
+        let at = self.node.junction(g)?;
         attach(
             g,
-            self.node.id,
+            at,
             Element::nonlinear(
                 &format!("orifice_{suffix}"),
                 ElementKind::R,

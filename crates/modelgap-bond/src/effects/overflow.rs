@@ -78,9 +78,10 @@ impl EffectDef for Overflow {
             &format!("outflow per unit of effort above e_max {}", added(c)),
         )?;
         let flow = law(c, &format!("{k} * max(e - {e_max}, 0)"))?;
+        let at = self.node.junction(g)?;
         attach(
             g,
-            self.node.id,
+            at,
             Element::nonlinear(
                 &format!("overflow_{suffix}"),
                 ElementKind::R,

@@ -95,9 +95,10 @@ impl EffectDef for PowerLoss {
             &format!("the exponent of the power loss {}", added(c)),
         )?;
         let flow = law(c, &format!("{k} * sign(e) * abs(e)^{p}"))?;
+        let at = self.node.junction(g)?;
         attach(
             g,
-            self.node.id,
+            at,
             Element::nonlinear(&format!("power_{suffix}"), ElementKind::R, None, Some(flow))
                 .described("a loss growing as a power of the effort"),
         )?;

@@ -114,7 +114,11 @@ impl Scales {
         });
         let junctions: Vec<ElementId> = g
             .element_ids()
-            .filter(|&id| g.element(id).kind.is_junction() || g.element(id).kind.is_source())
+            .filter(|&id| {
+                let kind = g.element(id).kind;
+                // A C too: alone on a 1-junction it is a node of its own (`Node::of`).
+                kind.is_junction() || kind.is_source() || kind == ElementKind::C
+            })
             .collect();
         let level = |vars: &BTreeMap<Var, f64>, j, flow| level(g, vars, j, flow);
         if let Some(x) = &steady {
@@ -185,7 +189,10 @@ impl Scales {
         }
         let junctions: Vec<ElementId> = g
             .element_ids()
-            .filter(|&id| g.element(id).kind.is_junction() || g.element(id).kind.is_source())
+            .filter(|&id| {
+                let kind = g.element(id).kind;
+                kind.is_junction() || kind.is_source() || kind == ElementKind::C
+            })
             .collect();
         let level = |vars: &BTreeMap<Var, f64>, j, flow| level(g, vars, j, flow);
         let n = model.n_states();

@@ -87,9 +87,10 @@ impl EffectDef for Store {
             &n.resistance_unit(),
             &format!("{through} to the second storage {tag}"),
         )?;
+        let at = n.junction(g)?;
         let path = attach(
             g,
-            n.id,
+            at,
             Element::one(&format!("to_store_{suffix}"))
                 .described("path to the second storage: common flow"),
         )?;

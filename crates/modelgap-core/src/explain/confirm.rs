@@ -643,7 +643,8 @@ pub(super) fn confirm(
 
 /// A law confirmed with more than one term (`fitted`), made as simple as its
 /// evidence allows: each term dropped in turn — the law without it built and
-/// fitted from the confirmed values — and the drop that costs least taken
+/// fitted from the confirmed values — and the drop that costs least (of drops
+/// within the significance margin of it, the one leaving fewest parameters) taken
 /// while the simpler law scores at least as well (evidence over the model as
 /// given, `base_weighted`, whitened with the full law's noise model, its
 /// parameters counted); then again on what is left. The screen may take a
@@ -692,15 +693,28 @@ pub(super) fn simplest_law(
                 f.error.is_none().then_some((smaller, f))
             })
             .collect();
+        // The drop with the most evidence; of drops within the significance margin of it,
+        // the one that leaves the fewest parameters (a sign with a constant beside it and a
+        // sign with a sharp `|tanh|` beside it, on a drive with an offset, scored 55072.8
+        // and 55071.4: which of them won turned on how far their fits were polished).
+        let floor = evidence(&best);
+        let trials: Vec<(screen::Law, Fitted)> = (trials.into_iter())
+            .filter(|t| evidence(&t.1) >= floor)
+            .collect();
+        let most = (trials.iter())
+            .map(|t| evidence(&t.1))
+            .fold(f64::NEG_INFINITY, f64::max);
         let Some((smaller, f)) = trials
             .into_iter()
-            .max_by(|a, b| evidence(&a.1).total_cmp(&evidence(&b.1)))
+            .filter(|t| evidence(&t.1) >= most - opts.significance)
+            .min_by(|a, b| {
+                (a.1.candidate.params.len())
+                    .cmp(&b.1.candidate.params.len())
+                    .then(evidence(&b.1).total_cmp(&evidence(&a.1)))
+            })
         else {
             break;
         };
-        if evidence(&f) < evidence(&best) {
-            break;
-        }
         law = smaller;
         best = f;
     }

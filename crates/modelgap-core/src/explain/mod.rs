@@ -65,6 +65,14 @@ const EQUIVALENT_COST: f64 = 1e-6;
 /// are the same explanation ([`same_explanation`]).
 const SAME_EXPLANATION: f64 = 0.05;
 
+/// A named effect of the menu whose weighted cost is at most this many times a
+/// discovered law's (its RMS error within 5 %) leaves what the law leaves: with fewer
+/// parameters it ranks first. On a series RLC loop whose capacitor leaks, the leakage
+/// across the capacitor (G within 0.7 %, one parameter) scored 22 below a formula of the
+/// loop current the symbolic search built (`atan(i/a) + c q`, three parameters, its RMS
+/// 0.3 % lower).
+const LAW_OCCAM: f64 = 1.1025;
+
 /// A first effect of a pair removes at least this share of what the best single
 /// effect removes.
 const FIRST_SHARE: f64 = 0.5;
@@ -1738,19 +1746,25 @@ fn order_ranking(ranking: &mut Vec<RankedCandidate>, significance: f64, cost_bef
         // A discovered law with fewer parameters than a named effect that leaves the same
         // (within a twentieth of what they remove) is that effect with its shape baked in (a
         // harmonic's order, chosen by the screen's scan): the named effect comes first.
+        // So is a named effect with fewer parameters than a law that leaves what the law
+        // leaves (its RMS within 5 %: [`LAW_OCCAM`]), whatever their scores: a flexible
+        // formula's last per mille is not worth its unnamed parameters.
         let simplest = simplest.map(|i| {
             if !is_law(&ranking[i]) {
                 return i;
             }
             let law_cost = ranking[i].cost;
+            let law_params = ranking[i].candidate.params.len();
             let removed = (cost_before - law_cost).max(0.0);
             (ranking.iter().enumerate())
                 .filter(|(_, r)| {
                     lowers(r)
                         && !r.screened
                         && !is_law(r)
-                        && r.score >= best - significance
-                        && (r.cost - law_cost).abs() <= SAME_EXPLANATION * removed
+                        && ((r.score >= best - significance
+                            && (r.cost - law_cost).abs() <= SAME_EXPLANATION * removed)
+                            || (r.candidate.params.len() < law_params
+                                && r.cost <= LAW_OCCAM * law_cost))
                 })
                 .min_by(|(_, a), (_, b)| {
                     (a.candidate.params.len())
