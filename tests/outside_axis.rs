@@ -36,31 +36,16 @@ fn drive(t: f64) -> f64 {
 /// 6 s at 1 kHz of a carriage with the extra force `law(v, x, t)` opposing
 /// it; velocity noise `white` × range plus AR(0.9) noise `coloured` × range.
 fn record(law: Option<Law>, white: f64, coloured: f64, seed: u64) -> Recording {
-    let (dt, n, sub) = (1e-3, 6000, 20);
     let f = |t: f64, s: [f64; 2]| {
         let extra = law.map_or(0.0, |l| l(s[0], s[1], t));
         [(drive(t) - C * s[0] - extra) / M, s[0]]
     };
-    let mut s = [0.0_f64; 2];
     let (mut ts, mut fs, mut vs) = (vec![], vec![], vec![]);
-    for k in 0..=n {
-        let t = k as f64 * dt;
+    common::rk4([0.0; 2], f, 1e-3, 6001, 20, |t, s| {
         ts.push(t);
         fs.push(drive(t));
         vs.push(s[0]);
-        let h = dt / sub as f64;
-        for j in 0..sub {
-            let t0 = t + j as f64 * h;
-            let add = |a: [f64; 2], b: [f64; 2], c: f64| [a[0] + c * b[0], a[1] + c * b[1]];
-            let k1 = f(t0, s);
-            let k2 = f(t0 + h / 2.0, add(s, k1, h / 2.0));
-            let k3 = f(t0 + h / 2.0, add(s, k2, h / 2.0));
-            let k4 = f(t0 + h, add(s, k3, h));
-            for i in 0..2 {
-                s[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-            }
-        }
-    }
+    });
     let mut rng = Noise(0x9E37_79B9_7F4A_7C15 ^ seed.wrapping_mul(0x2545_F491_4F6C_DD1D));
     let range = vs.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
     let gain = (1.0_f64 - 0.81).sqrt();

@@ -51,27 +51,13 @@ fn record(law: Option<Law>, seed: u64) -> Recording {
         let extra = law.map_or(0.0, |l| l(s[0], s[1]));
         [s[1], (force(&phases, t) - C * s[1] - K * s[0] + extra) / M]
     };
-    let (dt, n, sub) = (1e-3, 10_000, 10);
-    let mut s = [0.0_f64; 2];
+    let n = 10_000;
     let (mut ts, mut fs, mut xs) = (vec![], vec![], vec![]);
-    for k in 0..n {
-        let t = k as f64 * dt;
+    common::rk4([0.0; 2], f, 1e-3, n, 10, |t, s| {
         ts.push(t);
         fs.push(force(&phases, t));
         xs.push(s[0]);
-        let h = dt / sub as f64;
-        for j in 0..sub {
-            let t0 = t + j as f64 * h;
-            let add = |a: [f64; 2], b: [f64; 2], c: f64| [a[0] + c * b[0], a[1] + c * b[1]];
-            let k1 = f(t0, s);
-            let k2 = f(t0 + h / 2.0, add(s, k1, h / 2.0));
-            let k3 = f(t0 + h / 2.0, add(s, k2, h / 2.0));
-            let k4 = f(t0 + h, add(s, k3, h));
-            for i in 0..2 {
-                s[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-            }
-        }
-    }
+    });
     let mean = xs.iter().sum::<f64>() / n as f64;
     let spread = (xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64).sqrt();
     let xs = xs

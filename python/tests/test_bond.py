@@ -179,17 +179,18 @@ def test_compare_rejects_a_non_model(motor_run):
 
 
 def test_auto_hold_follows_what_the_recording_says(motor: BondModel):
-    # A smooth voltage, recorded at 1 kHz as a sampled analog signal: read linearly between
-    # samples it is the drive the recording was made with.
+    # A smooth voltage, recorded at 1 kHz as a sampled analog signal: read by a cubic
+    # through its samples it is the drive the recording was made with.
     t = np.linspace(0.0, 0.5, 501)
     v = 12.0 + 4.0 * np.sin(2 * np.pi * 7.0 * t) + 2.0 * np.sin(2 * np.pi * 31.0 * t)
-    rec = motor.simulate(t, {"V": (t, v)}, hold="linear")
+    rec = motor.simulate(t, {"V": (t, v)}, hold="cubic")
     assert motor.hold == "auto"
     notes = motor.hold_notes(rec)
     assert len(notes) == 1 and "input `V` is held by a smooth cubic" in notes[0], notes
     auto = modelgap.compare(motor, rec).output("omega").rms
     zoh = modelgap.compare(motor.with_hold("zoh"), rec).output("omega").rms
     assert zoh > 100 * auto, (auto, zoh)
-    assert motor.with_hold("linear").hold_notes(rec) == []
+    assert motor.with_hold("cubic").hold_notes(rec) == []
+    assert motor.with_hold("cubic").hold == "cubic"
     with pytest.raises(DataError, match='hold must be "auto", "zoh", "linear" or "cubic", found "x"'):
         motor.with_hold("x")

@@ -113,3 +113,38 @@ pub fn rk4_step<const N: usize>(
         x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
     }
 }
+
+/// Classical Runge–Kutta, the outside generators' integrator: `samples` samples `dt`
+/// apart from t = 0, `sub` steps each; `sample(t, &state)` sees the state at each sample
+/// time before the step on.
+pub fn rk4<const N: usize>(
+    mut s: [f64; N],
+    f: impl Fn(f64, [f64; N]) -> [f64; N],
+    dt: f64,
+    samples: usize,
+    sub: usize,
+    mut sample: impl FnMut(f64, &[f64; N]),
+) {
+    let h = dt / sub as f64;
+    let add = |a: [f64; N], b: [f64; N], c: f64| {
+        let mut out = a;
+        for (o, d) in out.iter_mut().zip(b) {
+            *o += c * d;
+        }
+        out
+    };
+    for k in 0..samples {
+        let t = k as f64 * dt;
+        sample(t, &s);
+        for j in 0..sub {
+            let t0 = t + j as f64 * h;
+            let k1 = f(t0, s);
+            let k2 = f(t0 + h / 2.0, add(s, k1, h / 2.0));
+            let k3 = f(t0 + h / 2.0, add(s, k2, h / 2.0));
+            let k4 = f(t0 + h, add(s, k3, h));
+            for i in 0..N {
+                s[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+            }
+        }
+    }
+}

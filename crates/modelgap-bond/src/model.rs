@@ -42,7 +42,7 @@ use crate::file::write_model;
 use crate::graph::BondGraph;
 use crate::qual::Qual;
 use crate::simulate::{
-    Drive, Hold, Inputs, ParamChange, Run, SimOptions, Solver, simulate, simulate_compiled,
+    Hold, Inputs, ParamChange, Run, SimOptions, Solver, simulate, simulate_compiled,
 };
 
 /// Relative tolerance of the adaptive solvers in [`BondModel`]'s predictions.
@@ -155,20 +155,7 @@ impl BondModel {
     /// The inputs of `graph` (this model's, or an edit of it) that `rec` records, each
     /// held as [`BondModel::hold_of`] says.
     pub(crate) fn inputs_of(&self, graph: &BondGraph, rec: &Recording) -> Inputs {
-        let mut inputs = Inputs::new();
-        for name in graph.inputs().keys() {
-            if let Some(s) = rec.signal(name) {
-                inputs.set(
-                    name,
-                    Drive::Sampled {
-                        t: rec.t().to_vec(),
-                        values: s.values.clone(),
-                        hold: self.hold_of(name),
-                    },
-                );
-            }
-        }
-        inputs
+        Inputs::from_recording_held(rec, graph.inputs().keys(), |name| self.hold_of(name))
     }
 
     /// The same model with predictions starting at `start`.

@@ -356,6 +356,16 @@ impl Inputs {
 
     /// Drives every model input found in `rec` from that recording, held as `hold`.
     pub fn from_recording_with(rec: &Recording, input_names: &[String], hold: Hold) -> Inputs {
+        Inputs::from_recording_held(rec, input_names, |_| hold)
+    }
+
+    /// Drives every model input found in `rec` from that recording, each held as
+    /// `hold_of` its name says.
+    pub fn from_recording_held<'a>(
+        rec: &Recording,
+        input_names: impl IntoIterator<Item = &'a String>,
+        hold_of: impl Fn(&str) -> Hold,
+    ) -> Inputs {
         let mut inputs = Inputs::new();
         for name in input_names {
             if let Some(s) = rec.signal(name) {
@@ -364,7 +374,7 @@ impl Inputs {
                     Drive::Sampled {
                         t: rec.t().to_vec(),
                         values: s.values.clone(),
-                        hold,
+                        hold: hold_of(name),
                     },
                 );
             }

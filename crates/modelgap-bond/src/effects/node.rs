@@ -119,11 +119,11 @@ impl Node {
     }
 }
 
-/// A 0-junction with a C: where leakage, a constant inflow and an overflow
-/// attach.
+/// A 0-junction with a C, or a C alone on a 1-junction whose unit names what it
+/// stores: where leakage, a constant inflow and an overflow attach.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Node {
-    /// The 0-junction.
+    /// The 0-junction; for a C alone on a 1-junction, the C (see [`Node::junction`]).
     pub id: ElementId,
     /// What its storage is.
     pub kind: NodeKind,
@@ -141,7 +141,8 @@ pub struct Node {
 }
 
 impl Node {
-    /// The node `id`, when it is a 0-junction with a C bonded to it.
+    /// The node `id`, when it is a 0-junction with a C bonded to it, or a C alone on a
+    /// 1-junction whose unit names a node kind (F, J/K, m², m³/Pa; not a spring).
     pub fn of(g: &BondGraph, id: ElementId) -> Option<Node> {
         match g.element(id).kind {
             ElementKind::Zero => {
