@@ -387,50 +387,8 @@ mod loop_capacitor {
     use crate::file::read_model;
     use crate::simulate::{Drive, Inputs, SimOptions, simulate, time_grid};
 
-    const RLC: &str = r#"
-name = "rlc"
-[parameters]
-L = { value = 0.01, unit = "H" }
-R = { value = 5.0, unit = "Ohm" }
-C = { value = 1e-4, unit = "F" }
-[inputs]
-V = { default = 0.0, unit = "V" }
-[[elements]]
-name = "V"
-kind = "Se"
-effort = "V"
-[[elements]]
-name = "1i"
-kind = "1"
-[[elements]]
-name = "L"
-kind = "I"
-parameter = "L"
-[[elements]]
-name = "R"
-kind = "R"
-parameter = "R"
-[[elements]]
-name = "C"
-kind = "C"
-parameter = "C"
-[[bonds]]
-from = "V"
-to = "1i"
-[[bonds]]
-from = "1i"
-to = "L"
-[[bonds]]
-from = "1i"
-to = "R"
-[[bonds]]
-from = "1i"
-to = "C"
-[[outputs]]
-name = "vc"
-value = "C.q / C"
-unit = "V"
-"#;
+    /// The series RLC loop of the examples: its capacitor bonded straight to the loop.
+    const RLC: &str = include_str!("../../../../examples/models/series-rlc.toml");
 
     /// A capacitor alone on a series loop is an electrical node, its effort's scale is its
     /// voltage over the run, and the edit puts a 0-junction between it and the loop.
@@ -455,11 +413,8 @@ unit = "V"
         assert_eq!(edited.element(j).kind, ElementKind::Zero);
         assert_eq!(node.junction(&mut edited).unwrap(), j, "once");
         assert!(Node::of(&edited, j).is_some() && Node::of(&edited, c).is_none());
-        // A spring (N/m) on a 1-junction is no node.
-        let spring = RLC.replace(
-            r#"C = { value = 1e-4, unit = "F" }"#,
-            r#"C = { value = 1e-4, unit = "m/N" }"#,
-        );
+        // A spring (a compliance in m/N) on a 1-junction is no node.
+        let spring = RLC.replace(r#"unit = "F""#, r#"unit = "m/N""#);
         let g = read_model(&spring).unwrap();
         assert!(Node::of(&g, g.find("C").unwrap()).is_none());
     }
