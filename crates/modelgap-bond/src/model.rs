@@ -133,7 +133,7 @@ impl BondModel {
     /// [`BondModel::hold`]).
     #[must_use]
     pub fn with_input_hold(mut self, input: &str, hold: Hold) -> BondModel {
-        self.input_holds.insert(input.to_owned(), hold);
+        self.set_input_hold(input, hold);
         self
     }
 

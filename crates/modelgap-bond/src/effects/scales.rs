@@ -72,6 +72,17 @@ fn level(g: &BondGraph, vars: &BTreeMap<Var, f64>, j: ElementId, flow: bool) -> 
         .fold(0.0, f64::max)
 }
 
+/// The elements whose effort and flow levels the scales keep: junctions, sources, and
+/// every C (alone on a 1-junction it is a node of its own, `Node::of`).
+fn measured_elements(g: &BondGraph) -> Vec<ElementId> {
+    (g.element_ids())
+        .filter(|&id| {
+            let kind = g.element(id).kind;
+            kind.is_junction() || kind.is_source() || kind == ElementKind::C
+        })
+        .collect()
+}
+
 /// The model's own scales: per 1-junction effort and flow levels, per storage
 /// element the peak state, and the slowest mode's rate (see the
 /// [module docs](super) for how they are found). The candidates' scales and
@@ -112,14 +123,7 @@ impl Scales {
             run.as_ref()
                 .map(|r| r.states.iter().map(|v| *v.last().unwrap_or(&0.0)).collect())
         });
-        let junctions: Vec<ElementId> = g
-            .element_ids()
-            .filter(|&id| {
-                let kind = g.element(id).kind;
-                // A C too: alone on a 1-junction it is a node of its own (`Node::of`).
-                kind.is_junction() || kind.is_source() || kind == ElementKind::C
-            })
-            .collect();
+        let junctions = measured_elements(g);
         let level = |vars: &BTreeMap<Var, f64>, j, flow| level(g, vars, j, flow);
         if let Some(x) = &steady {
             let vars = model.variable_values(0.0, x, &u);
@@ -187,13 +191,7 @@ impl Scales {
             self.duration = Some(last - first);
             self.sample_time = Some((last - first) / (run.t.len() - 1) as f64);
         }
-        let junctions: Vec<ElementId> = g
-            .element_ids()
-            .filter(|&id| {
-                let kind = g.element(id).kind;
-                kind.is_junction() || kind.is_source() || kind == ElementKind::C
-            })
-            .collect();
+        let junctions = measured_elements(g);
         let level = |vars: &BTreeMap<Var, f64>, j, flow| level(g, vars, j, flow);
         let n = model.n_states();
         let mut x = vec![0.0; n];
