@@ -413,6 +413,17 @@ mod loop_capacitor {
         assert_eq!(edited.element(j).kind, ElementKind::Zero);
         assert_eq!(node.junction(&mut edited).unwrap(), j, "once");
         assert!(Node::of(&edited, j).is_some() && Node::of(&edited, c).is_none());
+        // A bond split at an element that is not its end: a typed error naming both.
+        let r = edited.find("R").unwrap();
+        let err = edited
+            .split_bond(edited.ports(r)[0].0, c, crate::element::Element::zero("x"))
+            .unwrap_err();
+        let text = err.to_string();
+        assert!(
+            text.contains("C") && text.contains("is not an end of bond"),
+            "{text}"
+        );
+        assert!(edited.find("x").is_none(), "nothing added");
         // A spring (a compliance in m/N) on a 1-junction is no node.
         let spring = RLC.replace(r#"unit = "F""#, r#"unit = "m/N""#);
         let g = read_model(&spring).unwrap();
